@@ -1,0 +1,33 @@
+# tetherlab: every target builds its own virtual environment from pinned versions.
+PYTHON ?= python3
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+
+.PHONY: venv test test-all verify bench clean
+
+venv: $(STAMP)
+
+$(STAMP): pyproject.toml constraints.txt
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --disable-pip-version-check -c constraints.txt -e '.[dev,oracle]'
+	touch $(STAMP)
+
+# Fast checks (CI): everything not marked slow or oracle.
+test: $(STAMP)
+	$(PY) -m pytest -q -m "not slow and not oracle" -p no:cacheprovider
+
+# Every check, slow ones included.
+test-all: $(STAMP)
+	$(PY) -m pytest -q -p no:cacheprovider
+
+# Reproduce every report into reports/; exits non-zero when a gate fails.
+verify: $(STAMP)
+	$(PY) -m tetherlab.verify --out reports
+
+# Speed and memory targets: prints a table (never asserted in tests).
+bench: $(STAMP)
+	$(PY) -m tetherlab.bench
+
+clean:
+	rm -rf $(VENV) .pytest_cache build *.egg-info
