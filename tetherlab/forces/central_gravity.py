@@ -24,3 +24,20 @@ SPEC = register(
         pack=lambda params, central: [central["mu_m3_s2"]],
     )
 )
+
+# -- compiled kernels (SI floats only) -----------------------------------------------------------
+from .._jit import njit  # noqa: E402  (kernels below the declaration, as in every effect module)
+
+
+@njit(cache=True)
+def accel(mu, x, y, z):
+    """Acceleration -mu r/|r|^3 (m/s^2)."""
+    r2 = x * x + y * y + z * z
+    k = -mu / (r2 * (r2**0.5))
+    return k * x, k * y, k * z
+
+
+@njit(cache=True)
+def potential(mu, x, y, z):
+    """Potential per unit mass -mu/|r| (J/kg); its gradient is minus :func:`accel`."""
+    return -mu / (x * x + y * y + z * z) ** 0.5

@@ -1,0 +1,210 @@
+"""Diagnostics computed from the state at every output time (compiled, one pass over the rows).
+
+Per row: total linear momentum P, angular momentum H about the central body's centre, kinetic
+energy, potential energy of the conservative effects named by the scene (the same quadrature as
+the forces, so it is the exact potential of the discretised model), elastic energy of the rods
+(1/2 EA L_u eps^2 per rod: the energy of the elastic bar the TMED stands for), and per rod the
+strain, the axial force of eq. 1 and the joint reactions of the solve.  Libration angles are
+computed from the tether's end points in the centre of mass's orbital frame (docs/model.md, 7).
+
+The energy the paper's model conserves, if any, is discussed with numbers in docs/model.md.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._jit import njit
+from .kernel.effects import potential_per_mass
+from .kernel.layout import (
+    H_NQ,
+    H_NRODS,
+    H_NTETH,
+    H_OFF_QUAD,
+    H_OFF_ROD,
+    H_OFF_SCR,
+    H_OFF_TETH,
+    H_ROOT_M,
+    RT_EA,
+    RT_LU,
+    RT_M,
+    RT_SIZE,
+    SJ_J,
+    SJ_SIZE,
+    SR_EPS,
+    SR_FE,
+    SR_SIZE,
+    TT_NRODS,
+    TT_ROD0,
+    TT_SIZE,
+    TT_TIP_M,
+)
+from .tether.chain import SQ3, accelerations
+
+# columns of the global diagnostics array
+G_PX, G_PY, G_PZ, G_HX, G_HY, G_HZ, G_KE, G_VG, G_VE, G_E = range(10)
+G_NCOL = 10
+
+
+@njit(cache=True)
+def evaluate_rows(ts, Y, p, glob, rods, joints, acc):
+    """Fill ``glob`` (rows x G_NCOL), ``rods`` (rows x nrods x 2: strain, axial force) and
+    ``joints`` (rows x njoints x 3: reaction vectors J_k) for every state row of Y.
+
+    Returns the index of the first row whose right-hand side failed, or -1.
+    """
+    nrows = Y.shape[0]
+    n = Y.shape[1]
+    h = n // 2
+    nrods = int(p[H_NRODS])
+    nteth = int(p[H_NTETH])
+    offr = int(p[H_OFF_ROD])
+    offt = int(p[H_OFF_TETH])
+    scr = int(p[H_OFF_SCR])
+    offq = int(p[H_OFF_QUAD])
+    nq = int(p[H_NQ])
+    jscr = scr + nrods * SR_SIZE
+    m0 = p[H_ROOT_M]
+    for row in range(nrows):
+        t = ts[row]
+        q = Y[row, :h]
+        qd = Y[row, h:]
+        code = accelerations(t, q, qd, p, acc)
+        if code != 0:
+            return row
+        px = m0 * qd[0]
+        py = m0 * qd[1]
+        pz = m0 * qd[2]
+        hx = m0 * (q[1] * qd[2] - q[2] * qd[1])
+        hy = m0 * (q[2] * qd[0] - q[0] * qd[2])
+        hz = m0 * (q[0] * qd[1] - q[1] * qd[0])
+        ke = 0.5 * m0 * (qd[0] ** 2 + qd[1] ** 2 + qd[2] ** 2)
+        vg = m0 * potential_per_mass(p, t, q[0], q[1], q[2]) if m0 > 0.0 else 0.0
+        ve = 0.0
+        for k in range(nteth):
+            tb = offt + k * TT_SIZE
+            nk = int(p[tb + TT_NRODS])
+            g0 = int(p[tb + TT_ROD0])
+            mf = p[tb + TT_TIP_M]
+            ax = q[0]
+            ay = q[1]
+            az = q[2]
+            avx = qd[0]
+            avy = qd[1]
+            avz = qd[2]
+            for g in range(g0, g0 + nk):
+                rb = offr + g * RT_SIZE
+                m = p[rb + RT_M]
+                dx = q[3 + 3 * g]
+                dy = q[4 + 3 * g]
+                dz = q[5 + 3 * g]
+                ddx = qd[3 + 3 * g]
+                ddy = qd[4 + 3 * g]
+                ddz = qd[5 + 3 * g]
+                gx = ax + SQ3 * dx
+                gy = ay + SQ3 * dy
+                gz = az + SQ3 * dz
+                gvx = avx + SQ3 * ddx
+                gvy = avy + SQ3 * ddy
+                gvz = avz + SQ3 * ddz
+                px += m * gvx
+                py += m * gvy
+                pz += m * gvz
+                # TMED: masses m/2 at r_G -/+ d, so H = m r_G x v_G + m d x d'
+                hx += m * (gy * gvz - gz * gvy + dy * ddz - dz * ddy)
+                hy += m * (gz * gvx - gx * gvz + dz * ddx - dx * ddz)
+                hz += m * (gx * gvy - gy * gvx + dx * ddy - dy * ddx)
+                ke += 0.5 * m * (gvx**2 + gvy**2 + gvz**2 + ddx**2 + ddy**2 + ddz**2)
+                for j in range(2 * nq):
+                    xi = p[offq + j]
+                    w = p[offq + 2 * nq + j]
+                    s = 1.0 + xi
+                    vg += w * 0.5 * m * potential_per_mass(
+                        p, t, ax + s * SQ3 * dx, ay + s * SQ3 * dy, az + s * SQ3 * dz
+                    )
+                eps = p[scr + g * SR_SIZE + SR_EPS]
+                ve += 0.5 * p[rb + RT_EA] * p[rb + RT_LU] * eps * eps
+                rods[row, g, 0] = eps
+                rods[row, g, 1] = p[scr + g * SR_SIZE + SR_FE]
+                ax += 2.0 * SQ3 * dx
+                ay += 2.0 * SQ3 * dy
+                az += 2.0 * SQ3 * dz
+                avx += 2.0 * SQ3 * ddx
+                avy += 2.0 * SQ3 * ddy
+                avz += 2.0 * SQ3 * ddz
+            if mf > 0.0:
+                px += mf * avx
+                py += mf * avy
+                pz += mf * avz
+                hx += mf * (ay * avz - az * avy)
+                hy += mf * (az * avx - ax * avz)
+                hz += mf * (ax * avy - ay * avx)
+                ke += 0.5 * mf * (avx**2 + avy**2 + avz**2)
+                vg += mf * potential_per_mass(p, t, ax, ay, az)
+            for j in range(nk + 1):
+                jb = jscr + (g0 + k + j) * SJ_SIZE + SJ_J
+                joints[row, g0 + k + j, 0] = p[jb]
+                joints[row, g0 + k + j, 1] = p[jb + 1]
+                joints[row, g0 + k + j, 2] = p[jb + 2]
+        glob[row, G_PX] = px
+        glob[row, G_PY] = py
+        glob[row, G_PZ] = pz
+        glob[row, G_HX] = hx
+        glob[row, G_HY] = hy
+        glob[row, G_HZ] = hz
+        glob[row, G_KE] = ke
+        glob[row, G_VG] = vg
+        glob[row, G_VE] = ve
+        glob[row, G_E] = ke + vg + ve
+    return -1
+
+
+def compute(model, ts: np.ndarray, Y: np.ndarray) -> dict:
+    """Diagnostics for every row of Y (outputs of a run).  Returns numpy arrays in a dict."""
+    p = model.fresh_params()
+    nrows = Y.shape[0]
+    nr = model.n_rods
+    nj = nr + len(model.tethers)
+    glob = np.full((nrows, G_NCOL), np.nan)
+    rods = np.full((nrows, nr, 2), np.nan)
+    joints = np.full((nrows, nj, 3), np.nan)
+    acc = np.zeros(Y.shape[1] // 2)
+    if nrows:
+        evaluate_rows(
+            np.ascontiguousarray(ts, float), np.ascontiguousarray(Y, float), p, glob, rods, joints, acc
+        )
+    return {"global": glob, "rods": rods, "joints": joints}
+
+
+def orbital_frame(r: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rows: x radial (outward), y = z x x (along-track for a circular orbit), z along r x v."""
+    x = r / np.linalg.norm(r, axis=-1, keepdims=True)
+    hvec = np.cross(r, v)
+    z = hvec / np.linalg.norm(hvec, axis=-1, keepdims=True)
+    y = np.cross(z, x)
+    return np.stack([x, y, z], axis=-2)
+
+
+def libration_angles(r_cm, v_cm, r_from, r_to, side: float = 1.0):
+    """In-plane theta and out-of-plane phi (rad) of the line from `from` to `to` (docs/model.md 7).
+
+    With e = (r_to - r_from)/|.| in the orbital frame (x radial, y along-track, z normal):
+    e = side * (cos phi cos theta, cos phi sin theta, sin phi); side = +1 when the `to` body
+    is above (radially outward of) the `from` body at theta = phi = 0, -1 when below.
+    """
+    frame = orbital_frame(np.atleast_2d(r_cm), np.atleast_2d(v_cm))
+    e = np.atleast_2d(r_to - r_from)
+    e = side * e / np.linalg.norm(e, axis=-1, keepdims=True)
+    ex = np.einsum("nij,nj->ni", frame, e)
+    theta = np.arctan2(ex[:, 1], ex[:, 0])
+    phi = np.arcsin(np.clip(ex[:, 2], -1.0, 1.0))
+    return theta, phi
+
+
+def direction_from_angles(r, v, theta, phi, side: float = 1.0) -> np.ndarray:
+    """Unit vector (inertial) for in-plane theta, out-of-plane phi in the orbital frame of (r, v)."""
+    frame = orbital_frame(np.atleast_2d(r), np.atleast_2d(v))[0]
+    e = side * np.array([math.cos(phi) * math.cos(theta), math.cos(phi) * math.sin(theta), math.sin(phi)])
+    return frame.T @ e

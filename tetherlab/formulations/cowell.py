@@ -1,0 +1,27 @@
+"""Cowell's method: the Cartesian equations of motion integrated directly (paper section 2.6).
+
+State layout (SI): y = [q, q'] with q = (r0, d_1, ..., d_N): the root body's inertial position
+and the half-separation vector of every rod (docs/model.md, section 4).  Relative coordinates d_i
+rather than the absolute positions of the TMED masses keep full precision in the tether's shape
+when the orbit radius is thousands of times the rod length.
+"""
+
+from __future__ import annotations
+
+from numba import carray
+
+from .._jit import rhs_cfunc
+from ..kernel.layout import H_LEN, H_NSTATE
+from ..tether.chain import accelerations
+
+
+@rhs_cfunc
+def cowell_rhs(t, y_ptr, dy_ptr, p_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    n = int(p[H_NSTATE])
+    y = carray(y_ptr, (n,))
+    dy = carray(dy_ptr, (n,))
+    h = n // 2
+    for i in range(h):
+        dy[i] = y[h + i]
+    return accelerations(t, y[:h], y[h:], p, dy[h:])

@@ -1,0 +1,75 @@
+"""Dispatch from the effect codes a scene names to the compiled effect kernels.
+
+The kernel loops over the effect table of the parameter block, which holds *only* the effects the
+scene names: an effect that is not named is never reached.  Each evaluation increments a counter
+indexed by the effect code (``H_OFF_CNT``), which the tests use to prove it.
+
+Two entry points, because a point mass and a stretch of tether feel effects differently:
+
+* :func:`body_force` -- total force on a point mass (N);
+* :func:`rod_force_density` -- force per unit of the rod coordinate xi in [-1, 1] on a rod element
+  at position r, velocity v, with tangent dr/dxi and mass per unit xi (N); the half-rod totals R_1,
+  R_2 and the moment M_G of paper eq. 9-13 are quadratures of it (docs/model.md, section 3).
+
+Adding an effect = one module in tetherlab/forces/ + one branch in each function below.
+"""
+
+from __future__ import annotations
+
+from .._jit import njit
+from ..forces import central_gravity
+from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_CNT, H_OFF_EFF
+
+
+@njit(cache=True)
+def body_force(p, t, x, y, z, vx, vy, vz, mass):
+    neff = int(p[H_NEFF])
+    off = int(p[H_OFF_EFF])
+    cnt = int(p[H_OFF_CNT])
+    fx = 0.0
+    fy = 0.0
+    fz = 0.0
+    for e in range(neff):
+        code = int(p[off + e * ET_SIZE + ET_CODE])
+        par = int(p[off + e * ET_SIZE + ET_OFF_PAR])
+        p[cnt + code] += 1.0
+        if code == central_gravity.CODE:
+            ax, ay, az = central_gravity.accel(p[par], x, y, z)
+            fx += mass * ax
+            fy += mass * ay
+            fz += mass * az
+    return fx, fy, fz
+
+
+@njit(cache=True)
+def rod_force_density(p, t, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
+    neff = int(p[H_NEFF])
+    off = int(p[H_OFF_EFF])
+    cnt = int(p[H_OFF_CNT])
+    fx = 0.0
+    fy = 0.0
+    fz = 0.0
+    for e in range(neff):
+        code = int(p[off + e * ET_SIZE + ET_CODE])
+        par = int(p[off + e * ET_SIZE + ET_OFF_PAR])
+        p[cnt + code] += 1.0
+        if code == central_gravity.CODE:
+            ax, ay, az = central_gravity.accel(p[par], x, y, z)
+            fx += mass_per_xi * ax
+            fy += mass_per_xi * ay
+            fz += mass_per_xi * az
+    return fx, fy, fz
+
+
+@njit(cache=True)
+def potential_per_mass(p, t, x, y, z):
+    """Sum of the potentials (J/kg) of the conservative effects named (for energy diagnostics)."""
+    neff = int(p[H_NEFF])
+    off = int(p[H_OFF_EFF])
+    u = 0.0
+    for e in range(neff):
+        code = int(p[off + e * ET_SIZE + ET_CODE])
+        par = int(p[off + e * ET_SIZE + ET_OFF_PAR])
+        if code == central_gravity.CODE:
+            u += central_gravity.potential(p[par], x, y, z)
+    return u
