@@ -25,3 +25,19 @@ def cowell_rhs(t, y_ptr, dy_ptr, p_ptr):
     for i in range(h):
         dy[i] = y[h + i]
     return accelerations(t, y[:h], y[h:], p, dy[h:])
+
+
+def cowell_rhs_py(model, y, t=0.0):
+    """The same right-hand side called once from Python (set-up code only, never a loop)."""
+    import ctypes
+
+    import numpy as np
+
+    P = ctypes.POINTER(ctypes.c_double)
+    p = model.fresh_params()
+    y = np.ascontiguousarray(y, dtype=float)
+    dy = np.empty_like(y)
+    status = cowell_rhs.ctypes(t, y.ctypes.data_as(P), dy.ctypes.data_as(P), p.ctypes.data_as(P))
+    if status != 0:
+        raise FloatingPointError(f"right-hand side failed with status {status}")
+    return dy

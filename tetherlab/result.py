@@ -1,0 +1,199 @@
+"""The result of a run: time series, diagnostics, run statistics, and their files on disk.
+
+On disk (``Result.save(dir)``): ``timeseries.csv`` (every body, every tether node, strain and
+axial force per rod, reaction per joint), ``diagnostics.csv`` (momentum, angular momentum,
+energies, libration angles and their errors) and ``run.json`` (the scene, status and message,
+run statistics and library versions).  Both CSV files are read back by ``pandas.read_csv``.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import diagnostics as diag
+from .system import point_positions
+
+
+def library_versions() -> dict:
+    import astropy
+    import numba
+    import scipy
+
+    import tetherlab
+
+    return {
+        "tetherlab": tetherlab.__version__,
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "numba": numba.__version__,
+        "pandas": pd.__version__,
+        "astropy": astropy.__version__,
+        "machine": f"{platform.system()} {platform.machine()}",
+    }
+
+
+@dataclass
+class Result:
+    timeseries: pd.DataFrame
+    diagnostics: pd.DataFrame
+    stats: dict
+    status: int
+    message: str
+    scene_dict: dict = field(default_factory=dict)
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return self.status == 0
+
+    @classmethod
+    def from_run(cls, scene, prep, t, Y, d, stats, status, message, p) -> "Result":
+        model = prep.model
+        cols: dict[str, np.ndarray] = {"t_s": np.asarray(t, float)}
+        nrows = len(t)
+        nr = model.n_rods
+        h = Y.shape[1] // 2 if nrows else 3 * (1 + nr)
+        root = model.root_name
+        for j, ax in enumerate("xyz"):
+            cols[f"{root}.{ax}_m"] = Y[:, j] if nrows else np.zeros(0)
+        for j, ax in enumerate("xyz"):
+            cols[f"{root}.v{ax}_m_s"] = Y[:, h + j] if nrows else np.zeros(0)
+        # tether nodes (A_1 = root ... B_n = tip) and tips
+        nodes = {}
+        for k, tet in enumerate(model.tethers):
+            nk = tet.rods
+            pos = np.full((nrows, nk + 1, 3), np.nan)
+            vel = np.full((nrows, nk + 1, 3), np.nan)
+            for row in range(nrows):
+                pts = point_positions(model, Y[row])
+                pos[row] = pts["joints"][k]
+                vel[row] = pts["jvel"][k]
+            nodes[tet.name] = (pos, vel)
+            if tet.tip_mass_kg > 0:
+                for j, ax in enumerate("xyz"):
+                    cols[f"{tet.tip_name}.{ax}_m"] = pos[:, -1, j]
+                for j, ax in enumerate("xyz"):
+                    cols[f"{tet.tip_name}.v{ax}_m_s"] = vel[:, -1, j]
+        g_rod = 0
+        g_joint = 0
+        for k, tet in enumerate(model.tethers):
+            pos, _ = nodes[tet.name]
+            for j in range(tet.rods + 1):
+                for a, ax in enumerate("xyz"):
+                    cols[f"{tet.name}.node{j}.{ax}_m"] = pos[:, j, a]
+            for i in range(tet.rods):
+                cols[f"{tet.name}.rod{i + 1}.strain"] = d["rods"][:, g_rod + i, 0]
+                cols[f"{tet.name}.rod{i + 1}.axial_force_N"] = d["rods"][:, g_rod + i, 1]
+            for j in range(tet.rods + 1):
+                cols[f"{tet.name}.joint{j}.reaction_N"] = np.linalg.norm(d["joints"][:, g_joint + j, :], axis=1)
+            g_rod += tet.rods
+            g_joint += tet.rods + 1
+        ts = pd.DataFrame(cols)
+
+        g = d["global"]
+        dcols = {
+            "t_s": np.asarray(t, float),
+            "kinetic_J": g[:, diag.G_KE],
+            "potential_J": g[:, diag.G_VG],
+            "elastic_J": g[:, diag.G_VE],
+            "energy_J": g[:, diag.G_E],
+        }
+        for j, ax in enumerate("xyz"):
+            dcols[f"momentum_{ax}_N_s"] = g[:, diag.G_PX + j]
+        for j, ax in enumerate("xyz"):
+            dcols[f"angmom_{ax}_kg_m2_s"] = g[:, diag.G_HX + j]
+        if nrows:
+            E0 = g[0, diag.G_E]
+            scaleE = max(abs(g[0, diag.G_KE]), abs(g[0, diag.G_VG]), abs(g[0, diag.G_VE]), 1e-300)
+            dcols["energy_error_rel"] = (g[:, diag.G_E] - E0) / scaleE
+            H = g[:, diag.G_HX : diag.G_HZ + 1]
+            dcols["angmom_error_rel"] = np.linalg.norm(H - H[0], axis=1) / max(np.linalg.norm(H[0]), 1e-300)
+            # libration angles of each tether (root -> tip line) in the centre of mass's orbital frame
+            rc, vc = _center_of_mass_rows(model, Y)
+            for k, tet in enumerate(model.tethers):
+                pos, _ = nodes[tet.name]
+                if np.linalg.norm(np.cross(rc[0], vc[0])) > 0:
+                    th, ph = diag.libration_angles(rc, vc, pos[:, 0], pos[:, -1], prep.sides[k])
+                else:
+                    th = ph = np.full(nrows, np.nan)
+                dcols[f"{tet.name}.theta_rad"] = th
+                dcols[f"{tet.name}.phi_rad"] = ph
+            dcols["com_radius_m"] = np.linalg.norm(rc, axis=1)
+        dg = pd.DataFrame(dcols)
+        scene_dict = scene.to_dict() if hasattr(scene, "to_dict") else {}
+        meta = {
+            "versions": library_versions(),
+            "model": {
+                "rods": [t.rods for t in model.tethers],
+                "tether_models": [t.model for t in model.tethers],
+                "effects": model.effect_names,
+                "quadrature": model.quadrature,
+                "ref_radius_m": prep.ref_radius_m,
+                "ref_period_s": prep.ref_period_s,
+                "method": prep.method,
+                "rtol": prep.rtol,
+            },
+            "effect_evaluations": _effect_counts(p, model),
+        }
+        return cls(ts, dg, stats, int(status), message, scene_dict, meta)
+
+    # -- files ---------------------------------------------------------------------------------
+    def save(self, out_dir) -> Path:
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        self.timeseries.to_csv(out / "timeseries.csv", index=False, float_format="%.17g")
+        self.diagnostics.to_csv(out / "diagnostics.csv", index=False, float_format="%.17g")
+        run = {
+            "status": self.status,
+            "ok": self.ok,
+            "message": self.message,
+            "stats": self.stats,
+            "scene": self.scene_dict,
+            **self.meta,
+        }
+        (out / "run.json").write_text(json.dumps(run, indent=2, default=_json_default))
+        return out
+
+    @classmethod
+    def load(cls, out_dir) -> "Result":
+        out = Path(out_dir)
+        run = json.loads((out / "run.json").read_text())
+        ts = pd.read_csv(out / "timeseries.csv")
+        dg = pd.read_csv(out / "diagnostics.csv")
+        meta = {k: v for k, v in run.items() if k not in {"status", "ok", "message", "stats", "scene"}}
+        return cls(ts, dg, run["stats"], run["status"], run["message"], run.get("scene", {}), meta)
+
+
+def _json_default(o):
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, (np.floating,)):
+        return float(o)
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    return str(o)
+
+
+def _center_of_mass_rows(model, Y):
+    from .system import center_of_mass
+
+    rc = np.empty((len(Y), 3))
+    vc = np.empty((len(Y), 3))
+    for i, y in enumerate(Y):
+        rc[i], vc[i] = center_of_mass(model, y)
+    return rc, vc
+
+
+def _effect_counts(p, model) -> dict:
+    from .forces import EFFECTS
+    from .kernel.layout import H_OFF_CNT
+
+    off = int(p[H_OFF_CNT])
+    return {name: int(p[off + spec.code]) for name, spec in EFFECTS.items()}

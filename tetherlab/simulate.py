@@ -1,0 +1,423 @@
+"""Run a scene: build the model, lay out the initial state, integrate, compute diagnostics.
+
+``simulate(scene)`` is the whole pipeline behind ``tetherlab run``.  Everything here runs once per
+run; the only per-step work happens inside the compiled integrator and right-hand side.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import diagnostics as diag
+from .errors import SceneError
+from .forces import effect as effect_spec
+from .formulations.cowell import cowell_rhs
+
+from .kernel.layout import FAIL_TEXT, H_FAIL_CODE, H_FAIL_ROD, H_FAIL_T, H_FAIL_VAL
+from .orbits.kepler import elements_to_cartesian
+from .result import Result
+from .system import (
+    Model,
+    TetherSpec,
+    build_model,
+    center_of_mass,
+    chain_state,
+    tolerance_scales,
+)
+
+
+class SimulationError(RuntimeError):
+    """A run that stopped before its end.  ``.result`` holds every output computed before it."""
+
+    def __init__(self, message: str, result: Result):
+        super().__init__(message)
+        self.result = result
+
+
+@dataclass
+class Prepared:
+    """Everything the integrator needs, built from a scene (exposed for studies and benchmarks)."""
+
+    model: Model
+    y0: np.ndarray
+    t_out: np.ndarray
+    atol: np.ndarray
+    rtol: float
+    method: str
+    h_max: float
+    max_steps: int
+    ref_radius_m: float
+    ref_period_s: float
+    sides: list[float]
+
+
+def _state_of(entity, mu: float):
+    """(r, v) of a body or orbit block with position/velocity or elements, else None."""
+    if getattr(entity, "elements", None) is not None:
+        el = entity.elements
+        r, v = elements_to_cartesian(mu, el.a_m, el.e, el.i_rad, el.raan_rad, el.argp_rad, el.nu_rad)
+        return np.asarray(r, float), np.asarray(v, float)
+    if getattr(entity, "position_m", None) is not None:
+        v = entity.velocity_m_s if entity.velocity_m_s is not None else (0.0, 0.0, 0.0)
+        return np.asarray(entity.position_m, float), np.asarray(v, float)
+    return None
+
+
+def _topology(scene):
+    """Root body and the tethers hanging from it (a tether between two point masses, or hub and
+    spoke).  Other graphs are refused with a clear error until their solver exists."""
+    bodies = [b.name for b in scene.bodies]
+    tethers = list(scene.tethers)
+    if not tethers:
+        if len(bodies) != 1:
+            raise SceneError(
+                "bodies", "exactly one body when the scene has no tether", f"{len(bodies)} bodies"
+            )
+        return bodies[0], []
+    roots = {t.from_body for t in tethers}
+    if len(roots) != 1:
+        raise SceneError(
+            "tethers",
+            "all tethers starting on the same root body (two point masses, or hub and spoke)",
+            f"tethers starting on {sorted(roots)}",
+        )
+    root = roots.pop()
+    tips = [t.to_body for t in tethers]
+    if root in tips or len(set(tips)) != len(tips):
+        raise SceneError(
+            "tethers", "tip bodies distinct from each other and from the root", f"tips {tips}, root {root!r}"
+        )
+    unused = set(bodies) - {root} - set(tips)
+    if unused:
+        raise SceneError(
+            "bodies", "every body joined to the tether system", f"unconnected bodies {sorted(unused)}"
+        )
+    return root, tethers
+
+
+def prepare(scene) -> Prepared:
+    mu = scene.central_body.mu_m3_s2
+    central = {"mu_m3_s2": mu, "radius_m": scene.central_body.radius_m}
+    effects = [(effect_spec(e.name), e.params_si) for e in scene.effects]
+    root_name, tethers = _topology(scene)
+    root = scene.body(root_name)
+    specs = [
+        TetherSpec(
+            name=t.name,
+            rods=t.rods,
+            length_m=t.length_m,
+            ea_n=t.EA_N,
+            mass_kg=t.mass_kg,
+            damping_n_s=t.damping_N_s,
+            model=t.model,
+            tip_mass_kg=scene.body(t.to_body).mass_kg,
+            tip_name=t.to_body,
+        )
+        for t in tethers
+    ]
+    nq = tethers[0].quadrature if tethers else 2
+    if any(t.quadrature != nq for t in tethers):
+        raise SceneError(
+            "tethers.*.quadrature", "the same quadrature for every tether", str([t.quadrature for t in tethers])
+        )
+    model = build_model(
+        root_mass_kg=root.mass_kg,
+        tethers=specs,
+        effects=effects,
+        central=central,
+        quadrature=nq,
+        root_fixed=bool(getattr(root, "fixed", False)),
+        root_name=root_name,
+    )
+    y0, r_ref, v_ref, sides = _initial_state(scene, model, root_name, tethers, mu)
+
+    # reference orbit: radius and Keplerian period (for "N orbits" and the tolerance scales)
+    rr = float(np.linalg.norm(r_ref))
+    energy = 0.5 * float(v_ref @ v_ref) - mu / rr if mu > 0 else 0.0
+    if mu > 0 and energy < 0:
+        a = -mu / (2 * energy)
+        period = 2 * math.pi * math.sqrt(a**3 / mu)
+    else:
+        period = float("nan")
+    t_unit = math.sqrt(rr**3 / mu) if mu > 0 and rr > 0 else 1.0
+    ref_len = rr if rr > 0 else max((t.length_m for t in tethers), default=1.0)
+    atol = scene.integrator.atol * tolerance_scales(model, ref_len, t_unit)
+
+    duration = scene.duration_s
+    if duration is None:  # given in orbits
+        if not math.isfinite(period):
+            raise SceneError(
+                "duration", "a time (e.g. '10 d') for a reference that is not on a closed orbit",
+                f"{scene.duration_orbits} orbits",
+            )
+        duration = scene.duration_orbits * period
+    t_out = _output_times(scene.output, duration)
+    h_max = scene.integrator.max_step_s or 0.0
+    return Prepared(
+        model=model,
+        y0=y0,
+        t_out=t_out,
+        atol=atol,
+        rtol=scene.integrator.rtol,
+        method=scene.integrator.method,
+        h_max=h_max,
+        max_steps=scene.integrator.max_steps or 10**9,
+        ref_radius_m=rr,
+        ref_period_s=period,
+        sides=sides,
+    )
+
+
+def _output_times(output, duration: float) -> np.ndarray:
+    if output.times_s is not None:
+        t = np.asarray(output.times_s, float)
+        if t[0] > 0:
+            t = np.concatenate([[0.0], t])
+        return t
+    if output.count is not None:
+        return np.linspace(0.0, duration, int(output.count))
+    n = int(math.floor(duration / output.step_s + 1e-9))
+    t = output.step_s * np.arange(n + 1)
+    if duration - t[-1] > 1e-9 * max(duration, 1.0):
+        t = np.concatenate([t, [duration]])
+    return t
+
+
+def _initial_state(scene, model: Model, root_name: str, tethers, mu: float):
+    from .diagnostics import direction_from_angles
+
+    root = scene.body(root_name)
+    root_state = _state_of(root, mu)
+    orbit = scene.orbit
+    sides = []
+    # 1. every tether whose both ends carry explicit states: a straight line between them
+    explicit_tips = [_state_of(scene.body(t.to_body), mu) for t in tethers]
+    if tethers and root_state is not None and all(s is not None for s in explicit_tips):
+        r0, v0 = root_state
+        dirs, strains = [], []
+        rod_vel = []
+        for t, (rt, vt) in zip(tethers, explicit_tips):
+            span = rt - r0
+            dist = float(np.linalg.norm(span))
+            dirs.append(np.tile(span / dist, (t.rods, 1)))
+            strains.append(dist / t.length_m - 1.0)
+            rod_vel.append((vt - v0) / (2 * math.sqrt(3) * t.rods))
+            sides.append(1.0)
+        y0 = chain_state(model, r0, v0, dirs, strains, None)
+        h = y0.size // 2
+        for k, sl in enumerate(model.rod_slices):
+            for g in range(sl.start, sl.stop):
+                y0[h + 3 + 3 * g : h + 6 + 3 * g] = rod_vel[k]
+        return y0, r0, v0, sides
+
+    # 2. the reference point's orbit: [orbit] block, or the root's own state
+    if orbit is not None:
+        ref = _state_of(orbit, mu)
+        reference = orbit.reference
+        motion = orbit.motion
+    elif root_state is not None:
+        ref = root_state
+        reference = root_name
+        motion = "corotating"
+    else:
+        raise SceneError("orbit", "an [orbit] block or an initial state on the root body", "neither")
+    r_ref, v_ref = ref
+    omega = np.cross(r_ref, v_ref) / float(r_ref @ r_ref) if motion in ("corotating", "equilibrium") else None
+    dirs, strains = [], []
+    for t in tethers:
+        ini = t.initial
+        if ini is None:
+            raise SceneError(
+                f"tethers.{t.name}.initial", "an initial shape (only one end has an explicit state)", "none"
+            )
+        side = 1.0 if ini.side == "up" else -1.0
+        sides.append(side)
+        thetas, phis = ini.rod_angles_rad(t.rods)
+        dirs.append(np.array([direction_from_angles(r_ref, v_ref, th, ph, side) for th, ph in zip(thetas, phis)]))
+        strains.append(ini.strain)
+    # lay out with the root at the origin, then move the reference point onto its orbit
+    y0 = chain_state(model, np.zeros(3), np.zeros(3), dirs, strains, omega)
+    if reference == "center_of_mass":
+        c, _ = center_of_mass(model, y0)
+    elif reference == root_name:
+        c = np.zeros(3)
+    else:
+        k = [t.to_body for t in tethers].index(reference)
+        from .system import point_positions
+
+        c = point_positions(model, y0)["joints"][k][-1]
+    r0 = r_ref - c
+    v0 = v_ref + (np.cross(omega, r0 - r_ref) if omega is not None else 0.0)
+    h = y0.size // 2
+    y0[:3] = r0
+    y0[h : h + 3] = v0
+    if motion == "equilibrium":
+        y0 = _relative_equilibrium(model, y0, r_ref, v_ref, omega, reference, root_name, tethers)
+    return y0, r_ref, v_ref, sides
+
+
+def _relative_equilibrium(model, y0, r_ref, v_ref, omega, reference, root_name, tethers):
+    """Rod lengths and spin rate that make the laid-out system rotate rigidly (docs/model.md 8).
+
+    Unknowns: one length factor per rod and the spin rate Omega (about the orbit normal).
+    Equations: in the frame rotating with Omega, the axial component of every rod's relative
+    acceleration d'' - Omega x (Omega x d) and the radial component of the root's vanish.  For a
+    tether along the local vertical this is the exact relative equilibrium of paper section 4.3
+    (the tether stays vertical and the rods do not breathe); for a tilted tether it removes the
+    axial transient and leaves the libration.  The reference point is kept on its orbit.
+    """
+    from .formulations.cowell import cowell_rhs_py
+
+    nrods = model.n_rods
+    h = y0.size // 2
+    zhat = omega / np.linalg.norm(omega)
+    w0 = float(np.linalg.norm(omega))
+    d0 = y0[3:h].reshape(nrods, 3).copy()
+    size = 2 * math.sqrt(3) * float(np.linalg.norm(d0, axis=1).sum())  # whole tether length
+
+    def build(x):
+        y = y0.copy()
+        W = x[-1] * w0 * zhat
+        d = d0 * x[:-1, None]
+        y[3:h] = d.ravel()
+        if reference == "center_of_mass":
+            y[:3] = 0.0
+            c, _ = center_of_mass(model, y)
+        elif reference == root_name:
+            c = np.zeros(3)
+        else:
+            from .system import point_positions
+
+            y[:3] = 0.0
+            k = [t.to_body for t in tethers].index(reference)
+            c = point_positions(model, y)["joints"][k][-1]
+        y[:3] = r_ref - c if reference != root_name else r_ref
+        # rigid rotation with W about the centre of the central body
+        y[h : h + 3] = np.cross(W, y[:3])
+        y[h + 3 :] = np.cross(W, d).ravel()
+        return y, W
+
+    def residual(x):
+        y, W = build(x)
+        dy = cowell_rhs_py(model, y)
+        acc = dy[h:]
+        r0 = y[:3]
+        d = y[3:h].reshape(nrods, 3)
+        res = np.empty(nrods + 1)
+        a_rel0 = acc[:3] - np.cross(W, np.cross(W, r0))
+        res[0] = a_rel0 @ r0 / np.linalg.norm(r0) / (w0 * w0 * np.linalg.norm(r0))
+        for g in range(nrods):
+            u = d[g] / np.linalg.norm(d[g])
+            a_rel = acc[3 + 3 * g : 6 + 3 * g] - np.cross(W, np.cross(W, d[g]))
+            res[1 + g] = a_rel @ u / (w0 * w0 * size)
+        return res
+
+    # Newton with a finite-difference Jacobian; the residuals are relative accelerations in units
+    # of Omega^2 * size, whose round-off floor is ~1e-12 (8 m/s^2 gravity against ~1e-3 m/s^2
+    # tidal terms), so convergence is judged on the step, not on the residual alone.
+    x = np.ones(nrods + 1)
+    f = residual(x)
+    for _ in range(40):
+        J = np.empty((nrods + 1, nrods + 1))
+        for j in range(nrods + 1):
+            dx = 1e-6 * max(1.0, abs(x[j]))
+            xp = x.copy()
+            xp[j] += dx
+            J[:, j] = (residual(xp) - f) / dx
+        step = np.linalg.solve(J, f)
+        x = x - step
+        f = residual(x)
+        if np.max(np.abs(step)) < 1e-14 or np.max(np.abs(f)) < 1e-12:
+            break
+    if not np.max(np.abs(f)) < 1e-9:
+        raise SceneError(
+            "orbit.motion", "a configuration with a relative equilibrium (Newton converging)",
+            f"residual {np.max(np.abs(f)):.3g} after 40 iterations",
+        )
+    return build(x)[0]
+
+
+def failure_message(p: np.ndarray, model: Model, status: int, t_end: float, base: str) -> str:
+    code = int(p[H_FAIL_CODE])
+    if code == 0:
+        return base
+    rod = int(p[H_FAIL_ROD])
+    where = ""
+    if rod >= 0:
+        for k, sl in enumerate(model.rod_slices):
+            if sl.start <= rod < sl.stop:
+                where = f" in tether {model.tethers[k].name!r}, rod {rod - sl.start + 1} of {sl.stop - sl.start}"
+    why = FAIL_TEXT.get(code, f"failure code {code}")
+    detail = f" (strain {p[H_FAIL_VAL]:.6g})" if code == 11 else ""
+    return (
+        f"run stopped at t = {t_end:.9g} s: {why}{where}{detail}; "
+        f"last failing evaluation at t = {p[H_FAIL_T]:.9g} s. Outputs up to t = {t_end:.9g} s are kept."
+    )
+
+
+def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = True) -> Result:
+    """Integrate a scene and return a :class:`~tetherlab.result.Result`.
+
+    A run that fails raises :class:`SimulationError` whose ``.result`` keeps every output
+    computed before the failure (or, with ``raise_on_failure=False``, returns that result with
+    ``result.ok`` false and ``result.message`` saying when, where and why).
+    """
+    from .integrators.driver import integrate
+
+    prep = prepare(scene)
+    p = prep.model.fresh_params()
+    bar = _ProgressBar(prep.t_out[-1], enabled=progress)
+    t_wall = time.perf_counter()
+    res = integrate(
+        prep.method,
+        cowell_rhs,
+        0.0,
+        prep.y0,
+        prep.t_out,
+        p,
+        prep.rtol,
+        prep.atol,
+        h_max=prep.h_max,
+        max_steps=prep.max_steps,
+        progress=bar.update,
+    )
+    bar.close()
+    stats = dict(res.stats)
+    stats["total_wall_s"] = time.perf_counter() - t_wall
+    message = res.message if res.status == 0 else failure_message(p, prep.model, res.status, res.t_end, res.message)
+    d = diag.compute(prep.model, res.t, res.y)
+    result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)
+    if res.status != 0 and raise_on_failure:
+        raise SimulationError(message, result)
+    return result
+
+
+class _ProgressBar:
+    """A tqdm bar that appears only on runs longer than a couple of seconds."""
+
+    def __init__(self, t_end: float, enabled: bool | None):
+        self.t_end = t_end
+        self.enabled = enabled
+        self.start = time.perf_counter()
+        self.bar = None
+        self.last = 0.0
+
+    def update(self, t: float) -> None:
+        if self.enabled is False:
+            return
+        if self.bar is None:
+            if self.enabled is None and time.perf_counter() - self.start < 2.0:
+                return
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=float(self.t_end), unit="s(sim)", unit_scale=True, leave=False)
+        self.bar.update(float(t) - self.last)
+        self.last = float(t)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
