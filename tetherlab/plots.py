@@ -62,7 +62,7 @@ def plot_run(run_dir, out_dir=None) -> list[Path]:
 
     # tether shape in the orbital frame of the centre of mass, a few snapshots
     fig, ax = plt.subplots(figsize=(6, 6))
-    roots = [c[:-4] for c in ts.columns if c.endswith(".vx_m_s")]
+    roots = [c[: -len(".vx_m_s")] for c in ts.columns if c.endswith(".vx_m_s")]
     for name in tethers:
         nodes = sorted(
             {int(c.split(".")[1][4:]) for c in ts.columns if c.startswith(f"{name}.node") and c.endswith(".x_m")}

@@ -1,0 +1,1223 @@
+"""The scene: what to simulate, read from a TOML file or a Python dictionary, validated once.
+
+A scene says which central body, which effects, which bodies and tethers, where they start, how
+to integrate and what to output.  :func:`load_scene` reads a TOML file (``docs/scenes.md`` is the
+reference of every key); :meth:`Scene.from_dict` reads the same structure from Python, where any
+quantity may be a string ("5 km") or an astropy Quantity (``5 * u.km``).  Both return a
+:class:`Scene`: frozen dataclasses holding SI floats (angles in rad), unit suffixes in the field
+names (``length_m``, ``mass_kg``).
+
+Every check happens here, at load, before anything is integrated; every failure is a
+:class:`~tetherlab.errors.SceneError` naming the dotted key, what was expected and what was got.
+The dataclasses are the *output* of that validation: build them through :meth:`Scene.from_dict`
+(or :func:`load_scene`) and change them through :meth:`Scene.replace`, which re-validates.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import difflib
+import math
+import numbers
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import astropy.units as u
+import numpy as np
+
+from .errors import SceneError
+from .forces import EFFECTS
+from .orbits import kepler
+from .units import (
+    ANGLE,
+    DAMPING,
+    DENSITY,
+    DIMENSIONLESS,
+    FORCE,
+    GRAVITATIONAL_PARAMETER,
+    LENGTH,
+    LINEAR_DENSITY,
+    MASS,
+    MODULUS,
+    SPEED,
+    TIME,
+    Kind,
+    format_si,
+    is_number,
+    kind_for_unit,
+    shown,
+    to_si,
+)
+
+# Largest strain a scene may start with, or imply by placing a tether's two ends.  5 % is far
+# beyond the elastic limit of aluminium (about 0.3 %) and the working range of polymer tethers
+# (Dyneema/Spectra fail near 3-4 %), so anything larger is a units or placement mistake, not a
+# physical initial condition.
+MAX_SANE_STRAIN = 0.05
+
+CENTER_OF_MASS = "center_of_mass"
+TETHER_MODELS = ("paper", "energy")
+SHAPES = ("straight", "rods")
+SIDES = ("up", "down")
+MOTIONS = ("corotating", "translating", "equilibrium")
+INTEGRATOR_METHODS = (
+    "dop853",
+    "radau5",
+    "scipy:DOP853",
+    "scipy:Radau",
+    "scipy:LSODA",
+    "scipy:BDF",
+    "scipy:RK45",
+)
+QUADRATURE_RANGE = (1, 8)  # Gauss-Legendre nodes per half-rod
+
+Vector3 = tuple[float, float, float]
+
+
+# --------------------------------------------------------------------------------------------
+# The validated scene: SI floats only.
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CentralBody:
+    name: str
+    mu_m3_s2: float
+    radius_m: float
+
+
+# Only known presets are allowed: a misspelt or unsupported body must not silently become Earth.
+CENTRAL_BODY_PRESETS: dict[str, CentralBody] = {
+    # WGS 84 (NIMA TR8350.2, 3rd ed., tables 3.1 and 3.4): GM = 3.986004418e14 m^3/s^2 (with the
+    # atmosphere; also the IERS Conventions 2010 value) and equatorial radius a = 6378137.0 m.
+    "earth": CentralBody("earth", 3.986004418e14, 6378137.0),
+}
+
+
+@dataclass(frozen=True)
+class Elements:
+    """Classical orbital elements; conventions of :mod:`tetherlab.orbits.kepler`."""
+
+    a_m: float
+    e: float
+    i_rad: float = 0.0
+    raan_rad: float = 0.0
+    argp_rad: float = 0.0
+    nu_rad: float = 0.0
+
+    def to_cartesian(self, mu_m3_s2: float) -> tuple[np.ndarray, np.ndarray]:
+        return kepler.elements_to_cartesian(
+            mu_m3_s2, self.a_m, self.e, self.i_rad, self.raan_rad, self.argp_rad, self.nu_rad
+        )
+
+
+@dataclass(frozen=True)
+class Body:
+    """A point mass.  Its initial state is explicit (position/velocity, elements, or fixed with a
+    position) or, when all three are absent, laid out from the orbit and the tether shapes."""
+
+    name: str
+    mass_kg: float
+    fixed: bool = False
+    position_m: Vector3 | None = None
+    velocity_m_s: Vector3 | None = None
+    elements: Elements | None = None
+
+    @property
+    def has_state(self) -> bool:
+        return self.position_m is not None or self.elements is not None
+
+    def state(self, mu_m3_s2: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """Explicit inertial (r, v) in m and m/s, or None when the layout places the body."""
+        if self.elements is not None:
+            return self.elements.to_cartesian(mu_m3_s2)
+        if self.position_m is None:
+            return None
+        velocity = (0.0, 0.0, 0.0) if self.fixed else self.velocity_m_s
+        return np.array(self.position_m, dtype=float), np.array(velocity, dtype=float)
+
+
+@dataclass(frozen=True)
+class InitialShape:
+    """Initial layout of a tether laid out from one placed end.
+
+    ``theta_rad``/``phi_rad`` are single floats for ``shape = "straight"`` and tuples with one
+    angle per rod for ``shape = "rods"``.
+    """
+
+    shape: str = "straight"
+    theta_rad: float | tuple[float, ...] = 0.0
+    phi_rad: float | tuple[float, ...] = 0.0
+    side: str = "up"
+    strain: float = 0.0
+
+    def rod_angles_rad(self, rods: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """(theta, phi) of every rod, whatever the shape."""
+        if self.shape == "straight":
+            return (float(self.theta_rad),) * rods, (float(self.phi_rad),) * rods
+        return tuple(self.theta_rad), tuple(self.phi_rad)
+
+
+@dataclass(frozen=True)
+class Tether:
+    name: str
+    from_body: str  # body at end A_1
+    to_body: str  # body at end B_n
+    rods: int
+    length_m: float  # unstretched length L_u
+    EA_N: float  # axial stiffness
+    mass_kg: float
+    damping_N_s: float = 0.0  # D in T = EA eps + D d(eps)/dt
+    model: str = "paper"
+    quadrature: int = 2
+    diameter_m: float | None = None
+    # None when both ends are placed before the tether is laid (see Scene.layout_plan): it then
+    # starts straight between them.
+    initial: InitialShape | None = None
+
+
+@dataclass(frozen=True)
+class Orbit:
+    """Initial orbit of the reference point (the centre of mass, or a body)."""
+
+    reference: str = CENTER_OF_MASS
+    elements: Elements | None = None
+    position_m: Vector3 | None = None
+    velocity_m_s: Vector3 | None = None
+    motion: str = "corotating"
+
+    def state(self, mu_m3_s2: float) -> tuple[np.ndarray, np.ndarray] | None:
+        if self.elements is not None:
+            return self.elements.to_cartesian(mu_m3_s2)
+        if self.position_m is None:
+            return None
+        return np.array(self.position_m, dtype=float), np.array(self.velocity_m_s, dtype=float)
+
+
+@dataclass(frozen=True)
+class IntegratorSpec:
+    method: str = "dop853"
+    rtol: float = 1e-10
+    atol: float = 1e-10  # in units of each state component's natural scale
+    max_step_s: float | None = None
+    max_steps: int | None = None
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """Exactly one of the three is set."""
+
+    step_s: float | None = None
+    count: int | None = None
+    times_s: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True)
+class EffectUse:
+    name: str
+    params_si: dict[str, float]  # every declared parameter, defaults filled, in ParamSpec.unit
+
+
+@dataclass(frozen=True)
+class LayoutStep:
+    """One step of the initial layout: lay ``tether`` from its already placed end ``start``.
+
+    ``end`` is the body the step places (the tether's other end, put there by its initial
+    shape), or None when both ends are already placed and the tether starts straight between
+    them.
+    """
+
+    tether: str
+    start: str
+    end: str | None
+
+
+@dataclass(frozen=True)
+class Scene:
+    name: str
+    duration_s: float | None  # exactly one of duration_s and duration_orbits is set
+    duration_orbits: float | None
+    central_body: CentralBody
+    effects: tuple[EffectUse, ...]
+    bodies: tuple[Body, ...]
+    tethers: tuple[Tether, ...]
+    orbit: Orbit | None
+    integrator: IntegratorSpec
+    output: OutputSpec
+    description: str | None = None
+    epoch: str | None = None  # ISO date, TDB
+    source: str = field(default="<dict>", compare=False)  # file path, or "<dict>"
+
+    # -- construction ---------------------------------------------------------------------
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], source: str = "<dict>") -> "Scene":
+        """Validate ``data`` (the TOML structure; quantities as strings or astropy Quantities)."""
+        try:
+            return _parse_scene(data, str(source))
+        except SceneError as exc:
+            if exc.source is None:
+                raise exc.with_source(str(source)) from None
+            raise
+
+    def to_dict(self) -> dict[str, Any]:
+        """The scene as a TOML-shaped dictionary with SI strings ("5000.0 m").
+
+        ``Scene.from_dict(scene.to_dict()) == scene`` holds exactly: floats are written with
+        ``repr`` so no digit is lost.
+        """
+        return _scene_to_dict(self)
+
+    def replace(self, **changes: Any) -> "Scene":
+        """A validated copy with some values changed, for parameter sweeps.
+
+        Two spellings, mixable:
+
+        * a field of :class:`Scene` (``scene.replace(name="b")``), as ``dataclasses.replace``;
+        * a (dotted) scene key with a scene-file value, passed through ``**``:
+          ``scene.replace(**{"tethers.main.rods": 8, "duration": "2 orbits"})``; ``None``
+          removes the key (``{"tethers.main.EA": None, "tethers.main.E": "70 GPa"}``).
+
+        The result goes through :meth:`from_dict` again, so a change that breaks the scene
+        raises a SceneError just as a bad file would.
+        """
+        names = {f.name for f in dataclasses.fields(Scene)}
+        fields = {k: v for k, v in changes.items() if k in names}
+        keys = {k: v for k, v in changes.items() if k not in names}
+        # The duration is one of two fields; setting one clears the other.
+        if "duration_s" in fields and "duration_orbits" not in fields:
+            fields["duration_orbits"] = None
+        if "duration_orbits" in fields and "duration_s" not in fields:
+            fields["duration_s"] = None
+        scene = dataclasses.replace(self, **fields) if fields else self
+        data = scene.to_dict()
+        for path, value in keys.items():
+            _set_dotted(data, path, value)
+        return Scene.from_dict(data, source=self.source)
+
+    # -- look-ups and derived values --------------------------------------------------------
+
+    def body(self, name: str) -> Body:
+        for item in self.bodies:
+            if item.name == name:
+                return item
+        raise KeyError(f"no body {name!r} in scene {self.name!r}")
+
+    def tether(self, name: str) -> Tether:
+        for item in self.tethers:
+            if item.name == name:
+                return item
+        raise KeyError(f"no tether {name!r} in scene {self.name!r}")
+
+    def reference_state(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Initial inertial (r, v) of the orbit reference point, None without an [orbit]."""
+        return _reference_state(self.orbit, self.bodies, self.central_body.mu_m3_s2)
+
+    def orbit_period_s(self) -> float:
+        """Keplerian period of the reference point's initial osculating orbit."""
+        state = self.reference_state()
+        if state is None:
+            raise ValueError(f"scene {self.name!r} has no [orbit], hence no orbit period")
+        return _period_of_state(self.central_body.mu_m3_s2, *state)
+
+    def duration_seconds(self) -> float:
+        """The run length in seconds, "N orbits" resolved with :meth:`orbit_period_s`."""
+        if self.duration_s is not None:
+            return self.duration_s
+        return self.duration_orbits * self.orbit_period_s()
+
+    def layout_plan(self) -> tuple[LayoutStep, ...]:
+        """The order in which the initial layout places the bodies (see docs/scenes.md)."""
+        steps, _ = _layout(self.bodies, self.tethers, self.orbit)
+        return tuple(steps)
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a TOML scene file."""
+    path = Path(path)
+    if not path.is_file():
+        where = path.resolve()
+        reason = "is a directory, not a scene file" if path.is_dir() else "does not exist"
+        raise FileNotFoundError(f"scene file {str(path)!r} {reason} (resolved to {str(where)!r})")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise SceneError("", "a UTF-8 text file", f"undecodable bytes ({exc.reason})", source=str(path)) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        # Python 3.11 has no lineno attribute on the exception; the message ends "(at line L, column C)".
+        match = re.search(r"at line (\d+)", str(exc))
+        line = int(match.group(1)) if match else None
+        raise SceneError("", "valid TOML", str(exc), source=str(path), line=line) from None
+    return Scene.from_dict(data, source=str(path))
+
+
+# --------------------------------------------------------------------------------------------
+# Reading helpers: every one names the dotted key it reads.
+# --------------------------------------------------------------------------------------------
+
+_NOTHING = "nothing (the key is missing)"
+
+
+def _join(path: str, key: str) -> str:
+    return f"{path}.{key}" if path else key
+
+
+# Common other spellings of orbital elements, too short or too different for difflib to match.
+_ALIASES = {
+    "sma": "a",
+    "semi_major_axis": "a",
+    "ecc": "e",
+    "eccentricity": "e",
+    "inc": "i",
+    "inclination": "i",
+    "Omega": "raan",
+    "lan": "raan",
+    "omega": "argp",
+    "w": "argp",
+    "aop": "argp",
+    "ta": "nu",
+    "true_anomaly": "nu",
+    "anomaly": "nu",
+}
+
+
+def _suggest(word: str, options) -> str | None:
+    options = [str(o) for o in options]
+    if _ALIASES.get(word) in options:
+        return f"did you mean {_ALIASES[word]!r}?"
+    lower = {o.lower(): o for o in options}
+    if word.lower() in lower:
+        return f"did you mean {lower[word.lower()]!r}?"
+    close = difflib.get_close_matches(word.lower(), list(lower), n=1, cutoff=0.6)
+    return f"did you mean {lower[close[0]]!r}?" if close else None
+
+
+def _quoted(options) -> str:
+    return ", ".join(repr(o) for o in options)
+
+
+def _table(value: Any, path: str, allowed: tuple[str, ...]) -> Mapping[str, Any]:
+    """``value`` as a table whose keys are all in ``allowed`` (unknown keys raise, with a hint)."""
+    keys = f"keys among {_quoted(allowed)}" if allowed else "no keys ({} : it takes no parameters)"
+    if not isinstance(value, Mapping):
+        raise SceneError(path or "(top level)", f"a table with {keys}", f"{shown(value)} ({type(value).__name__})")
+    for key in value:
+        if not isinstance(key, str):
+            raise SceneError(_join(path, repr(key)), "a string key", f"{shown(key)} ({type(key).__name__})")
+        if key not in allowed:
+            raise SceneError(
+                _join(path, key),
+                f"one of the keys {_quoted(allowed)}" if allowed else keys,
+                f"an unknown key {key!r}",
+                hint=_suggest(key, allowed),
+            )
+    return value
+
+
+def _named_tables(value: Any, path: str, what: str) -> Mapping[str, Any]:
+    """A table of user-named sub-tables (bodies, tethers): names must be identifiers."""
+    if not isinstance(value, Mapping):
+        raise SceneError(path, f"a table of {what}", f"{shown(value)} ({type(value).__name__})")
+    for name in value:
+        if not (isinstance(name, str) and name.isidentifier()):
+            raise SceneError(_join(path, str(name)), f"a {what[:-1]} name that is an identifier (letters, digits, _)", repr(name))
+    return value
+
+
+def _required(table: Mapping[str, Any], key: str, path: str, expected: str) -> Any:
+    if key not in table:
+        raise SceneError(_join(path, key), expected, _NOTHING)
+    return table[key]
+
+
+def _quantity(value: Any, key: str, kind: Kind, *, positive: bool = False, nonnegative: bool = False) -> float:
+    result = to_si(value, kind, key=key)
+    if positive and not result > 0.0:
+        raise SceneError(key, f"{kind.label} > 0 (e.g. '{kind.example}')", shown(value))
+    if nonnegative and not result >= 0.0:
+        raise SceneError(key, f"{kind.label} >= 0 (e.g. '{kind.example}')", shown(value))
+    return result
+
+
+def _vector(value: Any, key: str, kind: Kind) -> Vector3:
+    if isinstance(value, u.Quantity) and not value.isscalar:
+        items = list(value.flatten()) if value.ndim == 1 else [value]
+    elif isinstance(value, (list, tuple)):
+        items = list(value)
+    else:
+        items = None
+    if items is None or len(items) != 3:
+        raise SceneError(key, f"a list of 3 components, each {kind.describe()}", shown(value))
+    return tuple(to_si(item, kind, key=f"{key}[{j}]") for j, item in enumerate(items))
+
+
+def _integer(value: Any, key: str, low: int, high: int | None = None) -> int:
+    bound = f">= {low}" if high is None else f"from {low} to {high}"
+    if not (isinstance(value, numbers.Integral) and not isinstance(value, bool)):
+        raise SceneError(key, f"an integer {bound}", f"{shown(value)} ({type(value).__name__})")
+    if value < low or (high is not None and value > high):
+        raise SceneError(key, f"an integer {bound}", shown(value))
+    return int(value)
+
+
+def _number(value: Any, key: str, expected: str) -> float:
+    if not is_number(value):
+        raise SceneError(key, expected, f"{shown(value)} ({type(value).__name__})")
+    result = float(value)
+    if not math.isfinite(result):
+        raise SceneError(key, expected, f"{shown(value)} (not finite)")
+    return result
+
+
+def _string(value: Any, key: str, expected: str = "a string") -> str:
+    if not isinstance(value, str):
+        raise SceneError(key, expected, f"{shown(value)} ({type(value).__name__})")
+    return value
+
+
+def _choice(value: Any, key: str, options: tuple[str, ...]) -> str:
+    expected = f"one of {_quoted(options)}"
+    text = _string(value, key, expected)
+    if text not in options:
+        raise SceneError(key, expected, repr(text), hint=_suggest(text, options))
+    return text
+
+
+def _reject_non_finite(value: Any, path: str) -> None:
+    """NaN and infinity are no physical input, wherever they appear (TOML has nan/inf literals)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise SceneError(path or "(top level)", "a finite number", repr(value))
+    if isinstance(value, Mapping):
+        for key, item in value.items():
+            _reject_non_finite(item, _join(path, str(key)))
+    elif isinstance(value, (list, tuple)):
+        for j, item in enumerate(value):
+            _reject_non_finite(item, f"{path}[{j}]")
+
+
+def _set_dotted(data: dict, path: str, value: Any) -> None:
+    *parents, last = path.split(".")
+    node = data
+    for j, part in enumerate(parents):
+        nxt = node.get(part)
+        if nxt is None:
+            nxt = node[part] = {}
+        if not isinstance(nxt, dict):
+            raise SceneError(".".join(parents[: j + 1]), "a table to change a key in", shown(nxt))
+        node = nxt
+    if value is None:
+        node.pop(last, None)
+    else:
+        node[last] = value
+
+
+# --------------------------------------------------------------------------------------------
+# Sections.
+# --------------------------------------------------------------------------------------------
+
+_TOP_KEYS = (
+    "name",
+    "description",
+    "epoch",
+    "duration",
+    "central_body",
+    "effects",
+    "bodies",
+    "tethers",
+    "orbit",
+    "integrator",
+    "output",
+)
+_ORBITS_RE = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*orbits?\s*$")
+
+
+def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
+    _reject_non_finite(data, "")
+    top = _table(data, "", _TOP_KEYS)
+
+    if "name" in top:
+        name = _string(top["name"], "name", "a non-empty string")
+        if not name.strip():
+            raise SceneError("name", "a non-empty string", repr(name))
+    else:
+        name = Path(source).stem if source != "<dict>" else "scene"
+    description = _string(top["description"], "description") if "description" in top else None
+    epoch = _parse_epoch(top["epoch"]) if "epoch" in top else None
+
+    central = _parse_central_body(top.get("central_body", {}))
+    mu = central.mu_m3_s2
+    effects = _parse_effects(_required(top, "effects", "", "a table of effects, e.g. central_gravity = {}"))
+    bodies = _parse_bodies(_required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu)
+    tethers = _parse_tethers(top.get("tethers", {}), bodies)
+    orbit = _parse_orbit(top["orbit"], bodies, mu) if "orbit" in top else None
+    tethers = _check_layout(bodies, tethers, orbit, mu)
+
+    duration_s, duration_orbits = _parse_duration(_required(top, "duration", "", "a time (e.g. '6000 s') or 'N orbits'"))
+    if duration_orbits is not None:
+        _check_orbits_duration(top["duration"], orbit, bodies, mu)
+    integrator = _parse_integrator(top.get("integrator", {}))
+    scene = Scene(
+        name=name,
+        duration_s=duration_s,
+        duration_orbits=duration_orbits,
+        central_body=central,
+        effects=effects,
+        bodies=bodies,
+        tethers=tethers,
+        orbit=orbit,
+        integrator=integrator,
+        output=OutputSpec(),  # filled below: checking output times needs the resolved duration
+        description=description,
+        epoch=epoch,
+        source=source,
+    )
+    output = _parse_output(_required(top, "output", "", "a table with one of step, count, times"), scene.duration_seconds())
+    return dataclasses.replace(scene, output=output)
+
+
+def _parse_epoch(value: Any) -> str:
+    from astropy.time import Time
+
+    expected = "an ISO date such as '2026-01-01T00:00:00' (TDB)"
+    if isinstance(value, datetime.datetime):
+        if value.tzinfo is not None:
+            raise SceneError("epoch", f"{expected} without a UTC offset (the scale is TDB)", value.isoformat())
+        value = value.isoformat()
+    elif isinstance(value, datetime.date):
+        value = value.isoformat()
+    text = _string(value, "epoch", expected)
+    for fmt in ("isot", "iso"):
+        try:
+            Time(text, format=fmt, scale="tdb")
+            return text
+        except ValueError:
+            continue
+    raise SceneError("epoch", expected, repr(text))
+
+
+def _parse_central_body(value: Any) -> CentralBody:
+    path = "central_body"
+    table = _table(value, path, ("name", "mu", "radius"))
+    name = _string(table.get("name", "earth"), f"{path}.name", f"one of {_quoted(CENTRAL_BODY_PRESETS)}")
+    if name not in CENTRAL_BODY_PRESETS:
+        raise SceneError(
+            f"{path}.name",
+            f"one of the known central bodies {_quoted(CENTRAL_BODY_PRESETS)}",
+            repr(name),
+            hint=_suggest(name, CENTRAL_BODY_PRESETS),
+        )
+    preset = CENTRAL_BODY_PRESETS[name]
+    mu = _quantity(table["mu"], f"{path}.mu", GRAVITATIONAL_PARAMETER, positive=True) if "mu" in table else preset.mu_m3_s2
+    radius = _quantity(table["radius"], f"{path}.radius", LENGTH, positive=True) if "radius" in table else preset.radius_m
+    return CentralBody(name, mu, radius)
+
+
+def _parse_effects(value: Any) -> tuple[EffectUse, ...]:
+    if not isinstance(value, Mapping):
+        raise SceneError("effects", "a table of effect name -> table of parameters", f"{shown(value)} ({type(value).__name__})")
+    uses = []
+    for name, params in value.items():
+        path = _join("effects", str(name))
+        if name not in EFFECTS:
+            raise SceneError(
+                path,
+                f"one of the known effects {_quoted(sorted(EFFECTS))}",
+                f"{name!r} (unknown effect)",
+                hint=_suggest(str(name), EFFECTS),
+            )
+        spec = EFFECTS[name]
+        table = _table(params, path, tuple(spec.params))
+        params_si: dict[str, float] = {}
+        for pname, pspec in spec.params.items():
+            key = _join(path, pname)
+            kind = kind_for_unit(pspec.unit)
+            if pname in table:
+                params_si[pname] = to_si(table[pname], kind, key=key)
+            elif pspec.required:
+                raise SceneError(key, kind.describe(), _NOTHING)
+            elif pspec.default is not None:
+                # A float default is already in the declared SI unit; a string one is parsed.
+                default = pspec.default
+                params_si[pname] = float(default) if is_number(default) else to_si(default, kind, key=key)
+        uses.append(EffectUse(name, params_si))
+    return tuple(uses)
+
+
+# -- bodies and states ------------------------------------------------------------------------
+
+_ELEMENT_KEYS = ("a", "e", "i", "raan", "argp", "nu")
+
+
+def _parse_elements(value: Any, path: str) -> Elements:
+    table = _table(value, path, _ELEMENT_KEYS)
+    a = _quantity(_required(table, "a", path, LENGTH.describe()), f"{path}.a", LENGTH)
+    e_raw = _required(table, "e", path, "an eccentricity (a number >= 0, e.g. 0.01)")
+    e = to_si(e_raw, DIMENSIONLESS, key=f"{path}.e")
+    angles = {k: to_si(table[k], ANGLE, key=f"{path}.{k}") if k in table else 0.0 for k in _ELEMENT_KEYS[2:]}
+
+    if e < 0.0:
+        raise SceneError(f"{path}.e", "an eccentricity >= 0", shown(e_raw))
+    if e == 1.0:
+        raise SceneError(
+            f"{path}.e",
+            "e != 1 (a parabolic orbit has no finite semi-major axis; give position and velocity instead)",
+            shown(e_raw),
+        )
+    if e < 1.0 and not a > 0.0:
+        raise SceneError(f"{path}.a", "a > 0 for an elliptic orbit (e < 1)", f"{shown(table['a'])} with e = {e!r}")
+    if e > 1.0 and not a < 0.0:
+        raise SceneError(f"{path}.a", "a < 0 for a hyperbolic orbit (e > 1)", f"{shown(table['a'])} with e = {e!r}")
+    # 180 deg converts to pi give or take an ulp; the tolerance keeps that legal.
+    if not (-1e-12 <= angles["i"] <= math.pi + 1e-12):
+        raise SceneError(f"{path}.i", "an inclination from 0 to 180 deg", shown(table["i"]))
+    if e > 1.0 and not 1.0 + e * math.cos(angles["nu"]) > 0.0:
+        limit = math.degrees(math.acos(-1.0 / e))
+        raise SceneError(
+            f"{path}.nu",
+            f"a true anomaly between the asymptotes of the hyperbola, |nu| < {limit:.6g} deg",
+            shown(table["nu"]),
+        )
+    return Elements(a, e, angles["i"], angles["raan"], angles["argp"], angles["nu"])
+
+
+def _parse_state(table: Mapping[str, Any], path: str, *, fixed: bool = False):
+    """(position, velocity, elements) of a body or of [orbit]; all None when none is given."""
+    has_elements = "elements" in table
+    has_position = "position" in table
+    has_velocity = "velocity" in table
+    if fixed:
+        if has_elements or has_velocity:
+            bad = "elements" if has_elements else "velocity"
+            raise SceneError(
+                _join(path, bad),
+                "no velocity or elements for a fixed body (it is held at rest: give position only)",
+                shown(table[bad]),
+            )
+        if not has_position:
+            raise SceneError(_join(path, "position"), f"the position of the fixed body ({LENGTH.describe()} x 3)", _NOTHING)
+        return _vector(table["position"], _join(path, "position"), LENGTH), None, None
+    if has_elements and (has_position or has_velocity):
+        raise SceneError(
+            _join(path, "elements"),
+            "either elements or position/velocity, not both",
+            "both elements and " + ("position" if has_position else "velocity"),
+        )
+    if has_elements:
+        return None, None, _parse_elements(table["elements"], _join(path, "elements"))
+    if has_position and not has_velocity:
+        raise SceneError(_join(path, "velocity"), f"a velocity to go with position ({SPEED.describe()} x 3)", _NOTHING)
+    if has_velocity and not has_position:
+        raise SceneError(_join(path, "position"), f"a position to go with velocity ({LENGTH.describe()} x 3)", _NOTHING)
+    if has_position:
+        return (
+            _vector(table["position"], _join(path, "position"), LENGTH),
+            _vector(table["velocity"], _join(path, "velocity"), SPEED),
+            None,
+        )
+    return None, None, None
+
+
+def _parse_bodies(value: Any, mu: float) -> tuple[Body, ...]:
+    tables = _named_tables(value, "bodies", "bodies")
+    if not tables:
+        raise SceneError("bodies", "at least one body", "an empty table")
+    bodies = []
+    for name, raw in tables.items():
+        path = f"bodies.{name}"
+        if name == CENTER_OF_MASS:
+            raise SceneError(path, f"a body name other than {CENTER_OF_MASS!r} (it names the centre of mass in [orbit])", repr(name))
+        table = _table(raw, path, ("mass", "position", "velocity", "elements", "fixed"))
+        mass = _quantity(_required(table, "mass", path, MASS.describe()), f"{path}.mass", MASS, positive=True)
+        fixed = table.get("fixed", False)
+        if not isinstance(fixed, bool):
+            raise SceneError(f"{path}.fixed", "true or false", f"{shown(fixed)} ({type(fixed).__name__})")
+        position, velocity, elements = _parse_state(table, path, fixed=fixed)
+        body = Body(name, mass, fixed, position, velocity, elements)
+        if body.has_state:
+            r, _ = body.state(mu)
+            if not np.linalg.norm(r) > 0.0:
+                raise SceneError(_join(path, "position"), "a position away from the centre of the central body", "the origin")
+        bodies.append(body)
+    return tuple(bodies)
+
+
+# -- tethers -----------------------------------------------------------------------------------
+
+_TETHER_KEYS = (
+    "from",
+    "to",
+    "rods",
+    "length",
+    "EA",
+    "E",
+    "diameter",
+    "mass",
+    "linear_density",
+    "density",
+    "damping",
+    "model",
+    "quadrature",
+    "initial",
+)
+
+
+def _body_ref(value: Any, key: str, names: list[str]) -> str:
+    expected = f"the name of a body ({_quoted(names)})"
+    name = _string(value, key, expected)
+    if name not in names:
+        raise SceneError(key, expected, f"{name!r} (no such body)", hint=_suggest(name, names))
+    return name
+
+
+def _parse_tethers(value: Any, bodies: tuple[Body, ...]) -> tuple[Tether, ...]:
+    tables = _named_tables(value, "tethers", "tethers")
+    names = [b.name for b in bodies]
+    tethers = []
+    to_owner: dict[str, str] = {}
+    for name, raw in tables.items():
+        path = f"tethers.{name}"
+        table = _table(raw, path, _TETHER_KEYS)
+        start = _body_ref(_required(table, "from", path, "the name of the body at end A_1"), f"{path}.from", names)
+        end = _body_ref(_required(table, "to", path, "the name of the body at end B_n"), f"{path}.to", names)
+        if end == start:
+            raise SceneError(f"{path}.to", f"a body other than 'from' ({start!r})", f"{end!r} (the same body at both ends)")
+        if end in to_owner:
+            # The layout and the kernel's node numbering assume each body ends at most one tether
+            # on its B_n side; lifting this needs a junction model, not just a different check.
+            raise SceneError(
+                f"{path}.to",
+                "a body that is not yet the 'to' end of another tether (for now a body may be the "
+                "'to' end of at most one tether)",
+                f"{end!r} (already the 'to' end of tether {to_owner[end]!r})",
+            )
+        to_owner[end] = name
+        rods = _integer(_required(table, "rods", path, "an integer >= 1"), f"{path}.rods", 1)
+        length = _quantity(_required(table, "length", path, LENGTH.describe()), f"{path}.length", LENGTH, positive=True)
+        diameter = _quantity(table["diameter"], f"{path}.diameter", LENGTH, positive=True) if "diameter" in table else None
+        area = None if diameter is None else math.pi * diameter * diameter / 4.0
+
+        # Axial stiffness: EA directly, or modulus E times the cross-section of `diameter`.
+        if "EA" in table and "E" in table:
+            raise SceneError(f"{path}.E", "either EA or E (with diameter), not both", "both EA and E")
+        if "EA" in table:
+            ea = _quantity(table["EA"], f"{path}.EA", FORCE, positive=True)
+        elif "E" in table:
+            modulus = _quantity(table["E"], f"{path}.E", MODULUS, positive=True)
+            if area is None:
+                raise SceneError(f"{path}.diameter", f"a diameter to go with E ({LENGTH.describe()})", _NOTHING)
+            ea = modulus * area
+        else:
+            raise SceneError(f"{path}.EA", f"the axial stiffness EA ({FORCE.describe()}), or E with diameter", _NOTHING)
+
+        # Mass: given, per unit length, or from the material density and cross-section.
+        given = [k for k in ("mass", "linear_density", "density") if k in table]
+        if not given:
+            raise SceneError(f"{path}.mass", f"the tether mass ({MASS.describe()}), or linear_density, or density with diameter", _NOTHING)
+        if len(given) > 1:
+            raise SceneError(f"{path}.{given[1]}", "only one of mass, linear_density, density", f"both {given[0]} and {given[1]}")
+        if given[0] == "mass":
+            mass = _quantity(table["mass"], f"{path}.mass", MASS, positive=True)
+        elif given[0] == "linear_density":
+            mass = _quantity(table["linear_density"], f"{path}.linear_density", LINEAR_DENSITY, positive=True) * length
+        else:
+            density = _quantity(table["density"], f"{path}.density", DENSITY, positive=True)
+            if area is None:
+                raise SceneError(f"{path}.diameter", f"a diameter to go with density ({LENGTH.describe()})", _NOTHING)
+            mass = density * area * length
+
+        damping = _quantity(table["damping"], f"{path}.damping", DAMPING, nonnegative=True) if "damping" in table else 0.0
+        model = _choice(table.get("model", "paper"), f"{path}.model", TETHER_MODELS)
+        quadrature = _integer(table.get("quadrature", 2), f"{path}.quadrature", *QUADRATURE_RANGE)
+        initial = _parse_initial(table["initial"], f"{path}.initial", rods) if "initial" in table else None
+        tethers.append(Tether(name, start, end, rods, length, ea, mass, damping, model, quadrature, diameter, initial))
+    return tuple(tethers)
+
+
+def _angles(value: Any, key: str, shape: str, rods: int) -> float | tuple[float, ...]:
+    if isinstance(value, u.Quantity) and value.ndim == 1:
+        value = list(value)  # an angle array from Python counts as a list
+    if shape == "straight":
+        if isinstance(value, (list, tuple)):
+            raise SceneError(key, f"a single angle for shape 'straight' ({ANGLE.describe()})", shown(value))
+        return to_si(value, ANGLE, key=key)
+    if not isinstance(value, (list, tuple)) or len(value) != rods:
+        got = f"{len(value)} angles" if isinstance(value, (list, tuple)) else shown(value)
+        raise SceneError(key, f"a list of {rods} angles, one per rod (rods = {rods})", got)
+    return tuple(to_si(item, ANGLE, key=f"{key}[{j}]") for j, item in enumerate(value))
+
+
+def _parse_initial(value: Any, path: str, rods: int) -> InitialShape:
+    table = _table(value, path, ("shape", "theta", "phi", "side", "strain"))
+    shape = _choice(table.get("shape", "straight"), f"{path}.shape", SHAPES)
+    if shape == "rods":
+        theta = _angles(_required(table, "theta", path, f"a list of {rods} angles, one per rod"), f"{path}.theta", shape, rods)
+        phi = _angles(table["phi"], f"{path}.phi", shape, rods) if "phi" in table else (0.0,) * rods
+    else:
+        theta = _angles(table["theta"], f"{path}.theta", shape, rods) if "theta" in table else 0.0
+        phi = _angles(table["phi"], f"{path}.phi", shape, rods) if "phi" in table else 0.0
+    side = _choice(table.get("side", "up"), f"{path}.side", SIDES)
+    strain = to_si(table.get("strain", 0.0), DIMENSIONLESS, key=f"{path}.strain")
+    if not (-1.0 < strain <= MAX_SANE_STRAIN):
+        raise SceneError(
+            f"{path}.strain",
+            f"a strain in (-1, {MAX_SANE_STRAIN!r}] (MAX_SANE_STRAIN: beyond any real tether's elastic range)",
+            shown(table.get("strain")),
+        )
+    return InitialShape(shape, theta, phi, side, strain)
+
+
+# -- orbit and layout --------------------------------------------------------------------------
+
+
+def _parse_orbit(value: Any, bodies: tuple[Body, ...], mu: float) -> Orbit:
+    path = "orbit"
+    table = _table(value, path, ("reference", "elements", "position", "velocity", "motion"))
+    names = [b.name for b in bodies]
+    reference = _string(table.get("reference", CENTER_OF_MASS), f"{path}.reference", f"{CENTER_OF_MASS!r} or a body name")
+    if reference != CENTER_OF_MASS and reference not in names:
+        raise SceneError(
+            f"{path}.reference",
+            f"{CENTER_OF_MASS!r} or the name of a body ({_quoted(names)})",
+            f"{reference!r} (no such body)",
+            hint=_suggest(reference, [CENTER_OF_MASS, *names]),
+        )
+    position, velocity, elements = _parse_state(table, path)
+    motion = _choice(table.get("motion", "corotating"), f"{path}.motion", MOTIONS)
+    orbit = Orbit(reference, elements, position, velocity, motion)
+    has_state = position is not None or elements is not None
+    if has_state:
+        r, _ = orbit.state(mu)
+        if not np.linalg.norm(r) > 0.0:
+            raise SceneError(f"{path}.position", "a position away from the centre of the central body", "the origin")
+
+    explicit = [b for b in bodies if b.has_state]
+    if reference == CENTER_OF_MASS:
+        if explicit:
+            raise SceneError(
+                f"{path}.reference",
+                "a body name when some bodies have explicit states (the centre of mass would depend on them)",
+                f"{CENTER_OF_MASS!r} while body {explicit[0].name!r} has an explicit state",
+            )
+        if not has_state:
+            raise SceneError(f"{path}.elements", "the initial orbit: elements, or position and velocity", _NOTHING)
+    else:
+        body = bodies[names.index(reference)]
+        if body.fixed:
+            raise SceneError(f"{path}.reference", "a moving body (a fixed body has no orbit)", f"{reference!r} (fixed)")
+        if body.has_state and has_state:
+            raise SceneError(
+                f"{path}.{'elements' if elements is not None else 'position'}",
+                f"no orbit state: the reference body {reference!r} already has its own (give it once)",
+                "a second initial state",
+            )
+        if not body.has_state and not has_state:
+            raise SceneError(
+                f"{path}.elements",
+                f"the initial orbit (elements, or position and velocity), or an explicit state on body {reference!r}",
+                _NOTHING,
+            )
+    return orbit
+
+
+def _reference_state(orbit: Orbit | None, bodies: tuple[Body, ...], mu: float):
+    if orbit is None:
+        return None
+    state = orbit.state(mu)
+    if state is None:  # the reference body carries the state
+        state = next(b for b in bodies if b.name == orbit.reference).state(mu)
+    return state
+
+
+def _period_of_state(mu: float, r: np.ndarray, v: np.ndarray) -> float:
+    # Vis-viva gives a from the energy alone; that is all a period needs (no angle is involved).
+    energy = 0.5 * float(np.dot(v, v)) - mu / float(np.linalg.norm(r))
+    if not energy < 0.0:
+        raise ValueError("the reference orbit is not closed (energy >= 0): it has no period")
+    return kepler.period(mu, -mu / (2.0 * energy))
+
+
+def _layout(bodies, tethers, orbit) -> tuple[list[LayoutStep], list[str]]:
+    """Layout order and the bodies it cannot place.
+
+    Start from the placed bodies (every body without [orbit]; with a body reference, it and the
+    bodies with explicit states; with the centre of mass, the first body, the whole layout being
+    shifted afterwards to put the centre of mass on the orbit).  Sweep the tethers in file order,
+    laying each that has exactly one placed end, until nothing changes; the tethers left with both
+    ends placed close loops and start straight between their ends.
+    """
+    if orbit is None:
+        placed = {b.name for b in bodies}
+    elif orbit.reference == CENTER_OF_MASS:
+        placed = {bodies[0].name}
+    else:
+        placed = {orbit.reference} | {b.name for b in bodies if b.has_state}
+    steps: list[LayoutStep] = []
+    laid: set[str] = set()
+    progress = True
+    while progress:
+        progress = False
+        for t in tethers:
+            if t.name in laid:
+                continue
+            if (t.from_body in placed) != (t.to_body in placed):
+                start, end = (t.from_body, t.to_body) if t.from_body in placed else (t.to_body, t.from_body)
+                steps.append(LayoutStep(t.name, start, end))
+                placed.add(end)
+                laid.add(t.name)
+                progress = True
+    steps.extend(
+        LayoutStep(t.name, t.from_body, None)
+        for t in tethers
+        if t.name not in laid and t.from_body in placed and t.to_body in placed
+    )
+    return steps, [b.name for b in bodies if b.name not in placed]
+
+
+def _check_layout(bodies, tethers, orbit, mu) -> tuple[Tether, ...]:
+    """Check that every body can be placed; fill or forbid each tether's initial shape."""
+    if orbit is None:
+        if not any(b.has_state for b in bodies):
+            raise SceneError(
+                "orbit",
+                "an [orbit] table giving the initial orbit, or explicit states for the bodies",
+                "neither an [orbit] table nor any body with position/velocity, elements or fixed position",
+            )
+        for b in bodies:
+            if not b.has_state:
+                raise SceneError(
+                    f"bodies.{b.name}",
+                    "an initial state (position and velocity, elements, or fixed with position)",
+                    "none",
+                    hint="without an [orbit] table every body needs its own state; add [orbit] to "
+                    "place it from the tether shapes",
+                )
+    steps, unplaced = _layout(bodies, tethers, orbit)
+    if unplaced:
+        raise SceneError(
+            f"bodies.{unplaced[0]}",
+            "an explicit initial state, or a chain of tethers joining it to the orbit reference "
+            f"{orbit.reference!r} or to a body with an explicit state",
+            "neither",
+        )
+    by_name = {b.name: b for b in bodies}
+    closing = {s.tether for s in steps if s.end is None}
+    result = []
+    for t in tethers:
+        path = f"tethers.{t.name}"
+        if t.name in closing:
+            if t.initial is not None:
+                raise SceneError(
+                    f"{path}.initial",
+                    "no initial shape: both ends are placed before this tether is laid, so it starts "
+                    "straight between them",
+                    "an [initial] table",
+                )
+            ends = (by_name[t.from_body].state(mu), by_name[t.to_body].state(mu))
+            if ends[0] is not None and ends[1] is not None:
+                _check_end_distance(t, float(np.linalg.norm(ends[1][0] - ends[0][0])), path)
+        elif t.initial is None:
+            t = dataclasses.replace(t, initial=InitialShape())
+        result.append(t)
+    return tuple(result)
+
+
+def _check_end_distance(t: Tether, distance: float, path: str) -> None:
+    if distance == 0.0:
+        raise SceneError(f"{path}.to", f"a body at another position than {t.from_body!r}", f"{t.to_body!r} at the same position")
+    strain = distance / t.length_m - 1.0
+    if strain > MAX_SANE_STRAIN:
+        raise SceneError(
+            f"{path}.length",
+            f"at least {distance / (1.0 + MAX_SANE_STRAIN):.6g} m, since the ends are {distance:.6g} m apart "
+            f"and MAX_SANE_STRAIN is {MAX_SANE_STRAIN:.0%}",
+            f"{t.length_m:.6g} m: ends farther apart than the tether can stretch (strain {strain:.3%})",
+        )
+
+
+def _parse_duration(value: Any) -> tuple[float | None, float | None]:
+    expected = "a time (e.g. '6000 s', '35 d') or a number of orbits (e.g. '10 orbits')"
+    if isinstance(value, str):
+        match = _ORBITS_RE.match(value)
+        if match:
+            orbits = float(match.group(1))
+            if not (math.isfinite(orbits) and orbits > 0.0):
+                raise SceneError("duration", f"{expected}, > 0", repr(value))
+            return None, orbits
+    if is_number(value):
+        raise SceneError("duration", expected, f"{shown(value)} (missing unit)")
+    seconds = to_si(value, TIME, key="duration")
+    if not seconds > 0.0:
+        raise SceneError("duration", f"{expected}, > 0", shown(value))
+    return seconds, None
+
+
+def _check_orbits_duration(raw: Any, orbit: Orbit | None, bodies, mu: float) -> None:
+    state = _reference_state(orbit, bodies, mu)
+    if state is None:
+        raise SceneError("duration", "a time: 'N orbits' needs an [orbit] table to say which orbit", repr(raw))
+    try:
+        _period_of_state(mu, *state)
+    except ValueError:
+        raise SceneError("duration", "a time: the reference orbit is not closed (e >= 1), so it has no period", repr(raw)) from None
+
+
+def _parse_integrator(value: Any) -> IntegratorSpec:
+    path = "integrator"
+    table = _table(value, path, ("method", "rtol", "atol", "max_step", "max_steps"))
+    method = _choice(table.get("method", "dop853"), f"{path}.method", INTEGRATOR_METHODS)
+    rtol = _number(table.get("rtol", 1e-10), f"{path}.rtol", "a relative tolerance in (0, 1)")
+    if not 0.0 < rtol < 1.0:
+        raise SceneError(f"{path}.rtol", "a relative tolerance in (0, 1)", shown(table["rtol"]))
+    atol = _number(table.get("atol", 1e-10), f"{path}.atol", "an absolute tolerance >= 0 (dimensionless)")
+    if not atol >= 0.0:
+        raise SceneError(f"{path}.atol", "an absolute tolerance >= 0 (dimensionless)", shown(table["atol"]))
+    max_step = _quantity(table["max_step"], f"{path}.max_step", TIME, positive=True) if "max_step" in table else None
+    max_steps = _integer(table["max_steps"], f"{path}.max_steps", 1) if "max_steps" in table else None
+    return IntegratorSpec(method, rtol, atol, max_step, max_steps)
+
+
+def _parse_output(value: Any, duration_s: float) -> OutputSpec:
+    path = "output"
+    table = _table(value, path, ("step", "count", "times"))
+    given = [k for k in ("step", "count", "times") if k in table]
+    if len(given) != 1:
+        raise SceneError(
+            path,
+            "exactly one of step, count, times",
+            "none of them" if not given else " and ".join(given),
+        )
+    if "step" in table:
+        return OutputSpec(step_s=_quantity(table["step"], f"{path}.step", TIME, positive=True))
+    if "count" in table:
+        return OutputSpec(count=_integer(table["count"], f"{path}.count", 2))
+    raw = table["times"]
+    key = f"{path}.times"
+    if isinstance(raw, u.Quantity) and not raw.isscalar and raw.ndim == 1:
+        raw = list(raw)
+    if not isinstance(raw, (list, tuple)) or not raw:
+        raise SceneError(key, f"a non-empty list of times ({TIME.describe()} each)", shown(raw))
+    times = tuple(to_si(item, TIME, key=f"{key}[{j}]") for j, item in enumerate(raw))
+    for j, t in enumerate(times):
+        if not 0.0 <= t <= duration_s:
+            raise SceneError(f"{key}[{j}]", f"a time within the run, from 0 to {duration_s!r} s", shown(raw[j]))
+        if j and not t > times[j - 1]:
+            raise SceneError(f"{key}[{j}]", "times in increasing order", f"{shown(raw[j])} after {shown(raw[j - 1])}")
+    return OutputSpec(times_s=times)
+
+
+# --------------------------------------------------------------------------------------------
+# Back to a dictionary.
+# --------------------------------------------------------------------------------------------
+
+
+def _vec(values, kind: Kind) -> list:
+    return [format_si(x, kind) for x in values]
+
+
+def _state_dict(position, velocity, elements) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    if elements is not None:
+        out["elements"] = {
+            "a": format_si(elements.a_m, LENGTH),
+            "e": float(elements.e),
+            "i": format_si(elements.i_rad, ANGLE),
+            "raan": format_si(elements.raan_rad, ANGLE),
+            "argp": format_si(elements.argp_rad, ANGLE),
+            "nu": format_si(elements.nu_rad, ANGLE),
+        }
+    if position is not None:
+        out["position"] = _vec(position, LENGTH)
+    if velocity is not None:
+        out["velocity"] = _vec(velocity, SPEED)
+    return out
+
+
+def _angles_dict(value) -> Any:
+    if isinstance(value, tuple):
+        return [format_si(x, ANGLE) for x in value]
+    return format_si(value, ANGLE)
+
+
+def _scene_to_dict(scene: Scene) -> dict[str, Any]:
+    if (scene.duration_s is None) == (scene.duration_orbits is None):
+        raise SceneError("duration", "exactly one of duration_s and duration_orbits set", "both or neither")
+    out: dict[str, Any] = {"name": scene.name}
+    if scene.description is not None:
+        out["description"] = scene.description
+    if scene.epoch is not None:
+        out["epoch"] = scene.epoch
+    out["duration"] = (
+        format_si(scene.duration_s, TIME) if scene.duration_s is not None else f"{float(scene.duration_orbits)!r} orbits"
+    )
+    cb = scene.central_body
+    out["central_body"] = {
+        "name": cb.name,
+        "mu": format_si(cb.mu_m3_s2, GRAVITATIONAL_PARAMETER),
+        "radius": format_si(cb.radius_m, LENGTH),
+    }
+    out["effects"] = {
+        use.name: {k: format_si(v, EFFECTS[use.name].params[k].unit) for k, v in use.params_si.items()}
+        for use in scene.effects
+    }
+    bodies = {}
+    for b in scene.bodies:
+        entry: dict[str, Any] = {"mass": format_si(b.mass_kg, MASS)}
+        if b.fixed:
+            entry["fixed"] = True
+        entry.update(_state_dict(b.position_m, b.velocity_m_s, b.elements))
+        bodies[b.name] = entry
+    out["bodies"] = bodies
+    if scene.tethers:
+        tethers = {}
+        for t in scene.tethers:
+            entry = {
+                "from": t.from_body,
+                "to": t.to_body,
+                "rods": t.rods,
+                "length": format_si(t.length_m, LENGTH),
+                "EA": format_si(t.EA_N, FORCE),
+                "mass": format_si(t.mass_kg, MASS),
+                "damping": format_si(t.damping_N_s, DAMPING),
+                "model": t.model,
+                "quadrature": t.quadrature,
+            }
+            if t.diameter_m is not None:
+                entry["diameter"] = format_si(t.diameter_m, LENGTH)
+            # A default shape is left out: it reads back the same, and a sweep that later places
+            # both ends explicitly is not tripped by a shape nobody asked for.
+            if t.initial is not None and t.initial != InitialShape():
+                s = t.initial
+                entry["initial"] = {
+                    "shape": s.shape,
+                    "theta": _angles_dict(s.theta_rad),
+                    "phi": _angles_dict(s.phi_rad),
+                    "side": s.side,
+                    "strain": float(s.strain),
+                }
+            tethers[t.name] = entry
+        out["tethers"] = tethers
+    if scene.orbit is not None:
+        o = scene.orbit
+        out["orbit"] = {"reference": o.reference, **_state_dict(o.position_m, o.velocity_m_s, o.elements), "motion": o.motion}
+    ig = scene.integrator
+    integrator: dict[str, Any] = {"method": ig.method, "rtol": float(ig.rtol), "atol": float(ig.atol)}
+    if ig.max_step_s is not None:
+        integrator["max_step"] = format_si(ig.max_step_s, TIME)
+    if ig.max_steps is not None:
+        integrator["max_steps"] = ig.max_steps
+    out["integrator"] = integrator
+    op = scene.output
+    if op.step_s is not None:
+        out["output"] = {"step": format_si(op.step_s, TIME)}
+    elif op.count is not None:
+        out["output"] = {"count": op.count}
+    else:
+        out["output"] = {"times": [format_si(x, TIME) for x in op.times_s]}
+    return out

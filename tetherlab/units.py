@@ -1,0 +1,177 @@
+"""Quantities at the boundary: "5 km" or ``5 * u.km`` in, an SI float out.
+
+Every dimensional number a user writes carries its unit ("5 km", "30 deg", "5e4 N"); this module
+parses it with :mod:`astropy.units`, checks its dimension against what the key needs, and returns a
+plain float in SI (angles in rad).  Past this boundary the simulator only sees SI floats, so unit
+mistakes are caught once, at load, with the key named.
+
+A bare number where a unit is required is refused ("missing unit"): guessing degrees versus
+radians or km versus m is exactly the silent error this layer exists to prevent.  NaN and infinity
+are refused everywhere, since no physical input is either.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import warnings
+from dataclasses import dataclass
+
+import astropy.units as u
+
+from .errors import SceneError
+
+
+@dataclass(frozen=True)
+class Kind:
+    """What a key holds: the SI unit of the float handed on, and how to describe it to a user."""
+
+    unit: str  # astropy unit string of the SI float; "" = dimensionless
+    label: str  # "a force"
+    example: str  # "5e4 N"
+
+    @property
+    def dimensionless(self) -> bool:
+        return self.unit == ""
+
+    def describe(self) -> str:
+        return f"{self.label} (e.g. '{self.example}')"
+
+
+LENGTH = Kind("m", "a length", "5 km")
+MASS = Kind("kg", "a mass", "392.2 kg")
+TIME = Kind("s", "a time", "60 s")
+ANGLE = Kind("rad", "an angle", "30 deg")
+FORCE = Kind("N", "a force", "5e4 N")
+SPEED = Kind("m / s", "a speed", "7.3 km/s")
+DAMPING = Kind("N s", "a damping coefficient (force x time)", "1e-3 N s")
+GRAVITATIONAL_PARAMETER = Kind("m3 / s2", "a gravitational parameter", "3.986004418e14 m3 / s2")
+MODULUS = Kind("Pa", "an elastic modulus (a pressure)", "70 GPa")
+DENSITY = Kind("kg / m3", "a density", "2700 kg/m3")
+LINEAR_DENSITY = Kind("kg / m", "a linear density", "2 g/m")
+DIMENSIONLESS = Kind("", "a number", "0.5")
+
+_KNOWN_KINDS = (
+    LENGTH,
+    MASS,
+    TIME,
+    ANGLE,
+    FORCE,
+    SPEED,
+    DAMPING,
+    GRAVITATIONAL_PARAMETER,
+    MODULUS,
+    DENSITY,
+    LINEAR_DENSITY,
+)
+
+
+def kind_for_unit(unit: str) -> Kind:
+    """The :class:`Kind` for an astropy unit string (as declared by an effect's ``ParamSpec``).
+
+    Known SI units get their friendly label; any other unit gets a generic description, so new
+    effects need not touch this module.
+    """
+    if unit.strip() == "":
+        return DIMENSIONLESS
+    target = u.Unit(unit)
+    for kind in _KNOWN_KINDS:
+        if u.Unit(kind.unit) == target:
+            return kind
+    return Kind(unit, f"a quantity in units of {unit!r} or equivalent", f"1 {unit}")
+
+
+def _as_kind(kind: Kind | str) -> Kind:
+    return kind if isinstance(kind, Kind) else kind_for_unit(kind)
+
+
+def _dimension(unit: u.UnitBase) -> str:
+    physical = str(unit.physical_type)
+    if physical == "unknown":
+        # astropy names no dimension for e.g. m3 / s2; the SI decomposition is the next best thing.
+        return unit.si.to_string()
+    return physical
+
+
+def shown(value: object) -> str:
+    """How a user's value is quoted back in an error message."""
+    if isinstance(value, u.Quantity):
+        return f"Quantity({value})"
+    return repr(value)
+
+
+def _short(message: str) -> str:
+    # astropy's parse errors run on with a link to its docs; the first sentences say it all.
+    return message.split(" If this is meant", 1)[0].strip()
+
+
+def is_number(value: object) -> bool:
+    """A real number given bare (int or float, numpy scalars included), never a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def parse_quantity(value: object, *, key: str) -> u.Quantity:
+    """A scalar astropy Quantity from a string like "5 km" or a Quantity; anything else raises.
+
+    A string without a unit ("0.5") parses as a dimensionless quantity; the caller decides whether
+    that is acceptable.
+    """
+    if isinstance(value, u.Quantity):
+        if not value.isscalar:
+            raise SceneError(key, "a single quantity", f"{shown(value)} (an array)")
+        return value
+    if isinstance(value, str):
+        try:
+            # Unit-parse warnings (deprecated spellings and the like) must not leak out as
+            # warnings far from the key: a value that does not parse cleanly is reported here.
+            with warnings.catch_warnings():
+                warnings.simplefilter("error")
+                quantity = u.Quantity(value)
+        except (TypeError, ValueError, Warning) as exc:
+            raise SceneError(
+                key, "a quantity with a unit, e.g. '5 km'", f"{value!r} ({_short(str(exc))})"
+            ) from None
+        if not quantity.isscalar:
+            raise SceneError(key, "a single quantity", f"{value!r} (an array)")
+        return quantity
+    raise SceneError(key, "a quantity with a unit, e.g. '5 km'", f"{shown(value)} ({type(value).__name__})")
+
+
+def to_si(value: object, kind: Kind | str, *, key: str) -> float:
+    """The SI float for ``value`` ("5 km", ``5 * u.km``, or a bare number if ``kind`` is dimensionless).
+
+    Raises :class:`SceneError` naming ``key`` for a missing unit, a wrong dimension, an
+    unparsable string or a non-finite value.
+    """
+    kind = _as_kind(kind)
+    if is_number(value):
+        if not kind.dimensionless:
+            raise SceneError(key, kind.describe(), f"{shown(value)} (missing unit)")
+        result = float(value)
+    elif kind.dimensionless and not isinstance(value, (str, u.Quantity)):
+        raise SceneError(key, kind.describe(), f"{shown(value)} ({type(value).__name__})")
+    else:
+        quantity = parse_quantity(value, key=key)
+        target = u.Unit(kind.unit) if kind.unit else u.dimensionless_unscaled
+        if quantity.unit.is_equivalent(target):
+            result = float(quantity.to_value(target))
+        elif quantity.unit.physical_type == "dimensionless":
+            raise SceneError(key, kind.describe(), f"{shown(value)} (missing unit)")
+        else:
+            raise SceneError(
+                key, kind.describe(), f"{shown(value)} (dimension {_dimension(quantity.unit)})"
+            )
+    if not math.isfinite(result):
+        raise SceneError(key, f"a finite value: {kind.describe()}", f"{shown(value)} (not finite)")
+    return result
+
+
+def format_si(value: float, kind: Kind | str) -> str | float:
+    """The scene-file form of an SI float: "5000.0 m"; a dimensionless value stays a float.
+
+    ``repr`` keeps every digit, so ``to_si(format_si(x, k), k) == x`` exactly.
+    """
+    kind = _as_kind(kind)
+    if kind.dimensionless:
+        return float(value)
+    return f"{float(value)!r} {kind.unit}"
