@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from tetherlab.scene import load_scene
-from tetherlab.simulate import simulate
+from tetherlab.pipeline import simulate
 
 from .helpers import MU_EARTH, SCENES, zero_crossing_frequency
 

@@ -12,7 +12,7 @@ import pytest
 from tetherlab.cli import main
 from tetherlab.errors import SceneError
 from tetherlab.scene import Scene, load_scene
-from tetherlab.simulate import SimulationError, simulate
+from tetherlab.pipeline import SimulationError, simulate
 
 from .helpers import SCENES
 

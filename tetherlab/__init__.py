@@ -11,8 +11,8 @@ def load_scene(path):
 
 
 def simulate(scene, **kwargs):
-    """Integrate a scene; see :func:`tetherlab.simulate.simulate`."""
-    from .simulate import simulate as _simulate
+    """Integrate a scene; see :func:`tetherlab.pipeline.simulate`."""
+    from .pipeline import simulate as _simulate
 
     return _simulate(scene, **kwargs)
 

@@ -69,7 +69,7 @@ def rhs_cost_table(max_rods: int = 256) -> list[dict]:
 
 def scene_table(scene_path=BENCH_SCENE) -> list[dict]:
     from .scene import load_scene
-    from .simulate import prepare, simulate
+    from .pipeline import prepare, simulate
 
     scene = load_scene(scene_path)
     rows = []

@@ -11,7 +11,7 @@ def _run(args) -> int:
     t0 = time.perf_counter()
     from .errors import SceneError
     from .scene import load_scene
-    from .simulate import SimulationError, simulate
+    from .pipeline import SimulationError, simulate
 
     try:
         scene = load_scene(args.scene)

@@ -35,7 +35,7 @@ def _freq(t, x):
 
 def check_libration(rows_out):
     from .scene import load_scene
-    from .simulate import simulate
+    from .pipeline import simulate
 
     worst = {"in": 0.0, "out": 0.0}
     for plane in ("in", "out"):
@@ -62,7 +62,7 @@ def check_libration(rows_out):
 
 def check_vertical(rows_out):
     from .scene import load_scene
-    from .simulate import simulate
+    from .pipeline import simulate
 
     worst = 0.0
     for n in (1, 2, 4):
@@ -75,7 +75,7 @@ def check_vertical(rows_out):
 
 def check_invariants(rows_out):
     from .scene import load_scene
-    from .simulate import simulate
+    from .pipeline import simulate
 
     worst_h = 0.0
     energy_err = 0.0
@@ -113,7 +113,7 @@ def section_43_figures(out: Path, rows_out):
     """Run the paper's section 4.3 scenes and draw their libration figures (paper Figs. 5-6)."""
     from .plots import plot_run
     from .scene import load_scene
-    from .simulate import simulate
+    from .pipeline import simulate
 
     figs = []
     for name in ("libration-inplane", "libration-outofplane", "lateral-two-rods", "vertical-equilibrium"):
