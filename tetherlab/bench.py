@@ -23,6 +23,7 @@ import numpy as np
 from ._jit import njit
 
 ROOT = Path(__file__).resolve().parent.parent
+METHODS = ("dop853", "radau5", "scipy:DOP853")
 BENCH_SCENE = ROOT / "studies" / "scenes" / "bench-libration.toml"
 
 
@@ -74,7 +75,7 @@ def scene_table(scene_path=BENCH_SCENE) -> list[dict]:
     scene = load_scene(scene_path)
     rows = []
     ref = None
-    for method in ("dop853", "radau5", "scipy:DOP853"):
+    for method in METHODS:
         sc = scene.replace(**{"integrator.method": method})
         simulate(sc, progress=False)  # warm-up: compilation excluded from the timing
         best = None

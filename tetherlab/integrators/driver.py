@@ -1,0 +1,329 @@
+"""Python layer over the compiled kernels: validation, chunked calls, progress, results.
+
+Inputs are validated once here, so the kernels can trust them.  The kernel is then called in
+chunks so a progress callback (and Ctrl-C) can run between them.  A chunk is a budget of
+*accepted steps*, sized from the measured step rate so one call lasts about ``chunk_seconds``; each
+call gets all remaining output times and stops right after an accepted step.  Chunking by steps
+rather than by slices of output times is deliberate: a chunk that ended at an output time would
+clip the step there, so the trajectory would depend on the chunk sizes, i.e. on the speed of the
+machine.  With step budgets and exact resumption (DOP853 carries only h and f(t, y); RADAU5 gets
+its workspace back) the result is bit-for-bit the same however the run is split.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba.core.ccallback import CFunc
+
+from tetherlab._jit import RHS_SIG
+
+from .dop853 import (
+    MAX_STEPS,
+    NON_FINITE,
+    OK,
+    RHS_FAILED,
+    ST_ACCEPTED,
+    ST_NEWTON_FAIL,
+    ST_NJAC,
+    ST_NLU,
+    ST_NRHS,
+    ST_REJECTED,
+    ST_RHS_STATUS,
+    STEP_UNDERFLOW,
+    dop853_run,
+)
+from .radau5 import radau5_core, radau5_workspace
+
+NATIVE_METHODS = ("dop853", "radau5")
+SCIPY_METHODS = ("scipy:DOP853", "scipy:Radau", "scipy:LSODA", "scipy:BDF", "scipy:RK45")
+METHODS = NATIVE_METHODS + SCIPY_METHODS
+
+#: Accepted steps of the first chunk: small, so the step rate is measured (and the first progress
+#: report arrives) quickly; later chunks are sized from that rate.
+_FIRST_CHUNK_STEPS = 64
+#: A chunk grows by at most this factor per call, so one unrepresentative fast chunk (e.g. a
+#: quiet stretch of the trajectory) cannot schedule a chunk of many minutes.
+_MAX_CHUNK_GROWTH = 8
+
+
+@dataclass(frozen=True)
+class IntegrationResult:
+    """Outcome of :func:`integrate`.
+
+    ``t`` are the output times actually reached and ``y[k]`` the state at ``t[k]``; on failure
+    they hold every output computed before it.  ``status`` is 0 on success, else the kernel code
+    (1 max_steps, 2 step underflow / no convergence, 3 rhs failure, 4 non-finite values) and
+    ``message`` says what happened and when.  ``t_end``/``y_end`` is the last accepted state.
+    """
+
+    t: np.ndarray
+    y: np.ndarray
+    status: int
+    message: str
+    t_end: float
+    y_end: np.ndarray
+    stats: dict = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        return self.status == OK
+
+
+# ----------------------------------------------------------------------------------------------
+# validation
+# ----------------------------------------------------------------------------------------------
+def _check_method(method):
+    if not isinstance(method, str) or method not in METHODS:
+        raise ValueError(f"method: expected one of {', '.join(METHODS)}; got {method!r}")
+
+
+def _finite_float(name, value, *, min_value=None, open_min=False):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name}: expected a real number; got {type(value).__name__} {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ValueError(f"{name}: expected a finite number; got {v!r}")
+    if min_value is not None and (v <= min_value if open_min else v < min_value):
+        rel = ">" if open_min else ">="
+        raise ValueError(f"{name}: expected a value {rel} {min_value}; got {v!r}")
+    return v
+
+
+def _check_rhs(rhs):
+    if not isinstance(rhs, CFunc) or rhs._sig != RHS_SIG:
+        got = getattr(rhs, "_sig", None) or type(rhs).__name__
+        raise ValueError(
+            "rhs: expected a numba cfunc with signature "
+            f"{RHS_SIG} (use tetherlab._jit.rhs_cfunc); got {got}"
+        )
+
+
+def _check_p(p):
+    # No silent copy: the model may write diagnostics into p, and the caller reads them there.
+    if not (
+        isinstance(p, np.ndarray)
+        and p.dtype == np.float64
+        and p.ndim == 1
+        and p.flags.c_contiguous
+    ):
+        desc = (
+            f"{p.dtype} array of shape {p.shape}, contiguous={p.flags.c_contiguous}"
+            if isinstance(p, np.ndarray)
+            else type(p).__name__
+        )
+        raise ValueError(f"p: expected a 1-D C-contiguous float64 numpy array; got {desc}")
+
+
+def _as_vector(name, value):
+    try:
+        arr = np.array(value, dtype=np.float64)  # a copy: the caller's array is never modified
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name}: expected an array of real numbers; got {value!r}") from exc
+    return arr
+
+
+def _validate(method, rhs, t0, y0, t_out, p, rtol, atol, h0, h_max, max_steps, chunk_seconds,
+              progress, fixed_step):  # fmt: skip
+    _check_method(method)
+    _check_rhs(rhs)
+    t0 = _finite_float("t0", t0)
+    y = _as_vector("y0", y0)
+    if y.ndim != 1 or y.size == 0:
+        raise ValueError(f"y0: expected a non-empty 1-D array; got shape {y.shape}")
+    if not np.all(np.isfinite(y)):
+        raise ValueError(f"y0: expected finite values; got non-finite at indices "
+                         f"{np.flatnonzero(~np.isfinite(y)).tolist()[:10]}")  # fmt: skip
+    n = y.size
+    tt = np.ascontiguousarray(_as_vector("t_out", t_out))
+    if tt.ndim != 1 or tt.size == 0:
+        raise ValueError(f"t_out: expected a non-empty 1-D array; got shape {tt.shape}")
+    if not np.all(np.isfinite(tt)):
+        raise ValueError("t_out: expected finite times; got NaN or Inf")
+    if np.any(np.diff(tt) < 0):
+        k = int(np.flatnonzero(np.diff(tt) < 0)[0])
+        raise ValueError(f"t_out: expected non-decreasing times; got t_out[{k}]={tt[k]!r} > "
+                         f"t_out[{k + 1}]={tt[k + 1]!r}")  # fmt: skip
+    if tt[0] < t0:
+        raise ValueError(f"t_out: expected times >= t0={t0!r} (forward integration only); "
+                         f"got t_out[0]={tt[0]!r}")  # fmt: skip
+    _check_p(p)
+    rtol = _finite_float("rtol", rtol)
+    if not 0.0 < rtol < 1.0:
+        raise ValueError(f"rtol: expected a value in (0, 1); got {rtol!r}")
+    a = _as_vector("atol", atol)
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.ndim != 1 or a.size != n:
+        raise ValueError(f"atol: expected a scalar or an array of length {n} (len(y0)); "
+                         f"got shape {a.shape}")  # fmt: skip
+    if not np.all(np.isfinite(a)) or np.any(a < 0):
+        raise ValueError(f"atol: expected finite values >= 0; got min {a.min()!r}")
+    a = np.ascontiguousarray(a)
+    h0 = _finite_float("h0", h0, min_value=0.0)
+    h_max = _finite_float("h_max", h_max, min_value=0.0)
+    if isinstance(max_steps, bool) or not isinstance(max_steps, numbers.Integral) or max_steps < 1:
+        raise ValueError(f"max_steps: expected an integer >= 1; got {max_steps!r}")
+    chunk_seconds = _finite_float("chunk_seconds", chunk_seconds, min_value=0.0, open_min=True)
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress: expected a callable or None; got {type(progress).__name__}")
+    if not isinstance(fixed_step, (bool, np.bool_)):
+        raise ValueError(f"fixed_step: expected a bool; got {fixed_step!r}")
+    fixed_step = bool(fixed_step)
+    if fixed_step:
+        if method not in NATIVE_METHODS:
+            raise ValueError(f"fixed_step: expected False with a scipy method (fixed steps are "
+                             f"supported by {NATIVE_METHODS} only); got True with "
+                             f"{method!r}")  # fmt: skip
+        if h0 <= 0.0:
+            raise ValueError(f"h0: expected the fixed step size > 0 (fixed_step=True); got {h0!r}")
+    return t0, y, tt, rtol, a, h0, h_max, int(max_steps), chunk_seconds, fixed_step
+
+
+# ----------------------------------------------------------------------------------------------
+# compilation
+# ----------------------------------------------------------------------------------------------
+def _call_kernel(method, rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
+                 fixed_step, ws, resume):  # fmt: skip
+    if method == "dop853":
+        return dop853_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
+                          fixed_step)  # fmt: skip
+    return radau5_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
+                       fixed_step, *ws, resume)  # fmt: skip
+
+
+def warm_up(method, rhs, n, p):
+    """Make sure the kernel of ``method`` is compiled (or loaded from the disk cache); return the
+    seconds that took.
+
+    The kernel is called with an output time equal to the start time, which returns before any
+    rhs evaluation (so the model is never called at a made-up state), but numba compiles the
+    whole function for these argument types on that first call.  Once warm, this costs a few
+    microseconds.  scipy methods need no compilation (the cfunc is compiled when defined): 0.0.
+    """
+    _check_method(method)
+    if method not in NATIVE_METHODS:
+        return 0.0
+    _check_rhs(rhs)
+    _check_p(p)
+    n = int(n)
+    if n < 1:
+        raise ValueError(f"n: expected an integer >= 1; got {n}")
+    y = np.zeros(n)
+    t_out = np.zeros(1)
+    y_out = np.zeros((1, n))
+    stats = np.zeros(8, dtype=np.int64)
+    ws = radau5_workspace(n) if method == "radau5" else ()
+    t0 = time.perf_counter()
+    _call_kernel(method, rhs, 0.0, y, t_out, p, 1e-6, np.ones(n), 0.0, 0.0, 1, y_out, stats,
+                 False, ws, False)  # fmt: skip
+    return time.perf_counter() - t0
+
+
+# ----------------------------------------------------------------------------------------------
+# integrate
+# ----------------------------------------------------------------------------------------------
+def status_message(status, t_end, h, rhs_status, n_newton_fail, max_steps):
+    """Human-readable outcome of a run (shared with the scipy backend)."""
+    if status == OK:
+        return f"reached t={t_end!r}"
+    if status == MAX_STEPS:
+        return f"stopped after max_steps={max_steps} steps at t={t_end!r} (h={h:.3e})"
+    if status == RHS_FAILED:
+        return (f"the right-hand side returned status {rhs_status} at a trial state just after "
+                f"t={t_end!r}, and reducing the step size did not help")  # fmt: skip
+    if status == NON_FINITE:
+        return (f"non-finite values (NaN or Inf) in the solution just after t={t_end!r} that "
+                f"reducing the step size did not remove")  # fmt: skip
+    if status == STEP_UNDERFLOW:
+        extra = f" ({n_newton_fail} Newton failures)" if n_newton_fail else ""
+        return (f"step size underflow or no convergence at t={t_end!r} (h={h:.3e}){extra}: "
+                f"the problem may be singular there or too stiff for the method")  # fmt: skip
+    return f"unknown status {status} at t={t_end!r}"
+
+
+def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_steps=10**7,
+              chunk_seconds=0.5, progress=None, fixed_step=False):  # fmt: skip
+    """Integrate y' = rhs(t, y; p) from t0 and return the solution at the times ``t_out``.
+
+    ``method``: one of :data:`METHODS`.  ``rhs``: a cfunc with :data:`tetherlab._jit.RHS_SIG`.
+    ``p``: the model's float64 parameter array, passed by reference (the model may write into
+    it).  ``rtol`` in (0, 1); ``atol`` scalar or per component (>= 0).  ``h0``: first step (0:
+    automatic); ``h_max``: largest step (0: unlimited); ``max_steps``: accepted-step budget of
+    the whole run.  ``progress(t)`` is called after each chunk of about ``chunk_seconds``.
+    ``fixed_step``: constant steps of ``h0`` without error control (native methods only; for
+    convergence studies).  Never raises for a failure of the integration itself: that is
+    reported in the result's ``status``/``message``, with every output computed before it.
+    """
+    t0, y, tt, rtol, atol_v, h0, h_max, max_steps, chunk_seconds, fixed_step = _validate(
+        method, rhs, t0, y0, t_out, p, rtol, atol, h0, h_max, max_steps, chunk_seconds,
+        progress, fixed_step,
+    )  # fmt: skip
+    if method in SCIPY_METHODS:
+        from .scipy_backend import integrate_scipy
+
+        return integrate_scipy(method.split(":", 1)[1], rhs, t0, y, tt, p, rtol, atol_v, h0,
+                               h_max, max_steps, chunk_seconds, progress)  # fmt: skip
+
+    n = y.size
+    m = tt.size
+    compile_s = warm_up(method, rhs, n, p)
+    y_out = np.empty((m, n))
+    stats = np.zeros(8, dtype=np.int64)
+    ws = radau5_workspace(n) if method == "radau5" else ()
+
+    t = t0
+    h = h0
+    done = 0
+    budget = max_steps
+    chunk = _FIRST_CHUNK_STEPS
+    n_chunks = 0
+    resume = False
+    wall0 = time.perf_counter()
+    while True:
+        steps_before = int(stats[ST_ACCEPTED])
+        c0 = time.perf_counter()
+        status, t, h, nd = _call_kernel(method, rhs, t, y, tt[done:], p, rtol, atol_v, h, h_max,
+                                        min(chunk, budget), y_out[done:], stats, fixed_step, ws,
+                                        resume)  # fmt: skip
+        dt = time.perf_counter() - c0
+        n_chunks += 1
+        resume = True
+        done += int(nd)
+        steps = int(stats[ST_ACCEPTED]) - steps_before
+        budget -= steps
+        if progress is not None:
+            progress(float(t))
+        if status != MAX_STEPS or budget <= 0:
+            break
+        rate = steps / max(dt, 1e-9)
+        chunk = int(min(max(rate * chunk_seconds, 1.0), chunk * _MAX_CHUNK_GROWTH))
+    wall_s = time.perf_counter() - wall0
+
+    status = int(status)
+    t = float(t)
+    h = float(h)
+    stats_d = {
+        "n_accepted": int(stats[ST_ACCEPTED]),
+        "n_rejected": int(stats[ST_REJECTED]),
+        "n_rhs": int(stats[ST_NRHS]),
+        "n_jac": int(stats[ST_NJAC]),
+        "n_lu": int(stats[ST_NLU]),
+        "rhs_status": int(stats[ST_RHS_STATUS]),
+        "n_newton_fail": int(stats[ST_NEWTON_FAIL]),
+        "n_chunks": n_chunks,
+        "wall_s": wall_s,
+        "compile_s": compile_s,
+    }
+    msg = status_message(status, t, h, stats_d["rhs_status"], stats_d["n_newton_fail"], max_steps)
+    # Only rows that were computed are returned; a failed run's unused rows are dropped (copied
+    # out so the unused tail of a large buffer is freed).
+    y_res = y_out if done == m else y_out[:done].copy()
+    return IntegrationResult(
+        t=tt[:done].copy(), y=y_res, status=status, message=msg, t_end=t, y_end=y.copy(),
+        stats=stats_d,
+    )  # fmt: skip

@@ -1,0 +1,718 @@
+"""RADAU5: implicit Runge-Kutta Radau IIA of order 5 for stiff problems, compiled.
+
+Reference: E. Hairer, G. Wanner, "Solving Ordinary Differential Equations II", 2nd ed., Springer
+1996, section IV.8, and Hairer's Fortran code RADAU5 (routine RADCOR, version of 2002), followed
+closely so the kernel can be read against it; Fortran names are kept for the scalars.
+
+* Simplified Newton iteration on the stage increments Z, transformed with T so the 3n x 3n system
+  splits into one real n x n system (U1/h - J) and one complex one ((ALPH + i BETA)/h - J).
+* Jacobian by forward differences of the rhs, column increment sqrt(eps*max(1e-5, |y_j|)), kept
+  across steps while the Newton contraction rate theta stays <= THET (Hairer's reuse rule); the
+  LU factors are kept while h changes by less than the factor QUOT1..QUOT2.
+* Error estimate of Hairer (IV.8, (8.19)-(8.20)) including the extra solve with f(t, y + err) on
+  the first step and after a rejection ("stiff" filtering), Gustafsson's predictive controller.
+* Dense output: the collocation polynomial (CONTR5).
+* Tolerances are transformed as in RADAU5's driver, rtol' = 0.1 rtol^(2/3) and
+  atol' = atol rtol'/rtol: the estimate is of an embedded order-3 solution, which overstates the
+  error of the order-5 result; Hairer calibrated this map so the global error tracks rtol.
+
+Dense LU with partial pivoting (real and complex) is written here because numba offers only
+``np.linalg.solve``, which refactorises every call; the factors are reused across many Newton
+iterations and steps.
+
+Two entry points: :func:`radau5_run` has the common kernel ABI and starts fresh on every call.
+:func:`radau5_core` additionally takes a workspace (:func:`radau5_workspace`) holding the Jacobian,
+LU factors, the last collocation polynomial and the controller state, and can resume from it:
+the driver uses that, so splitting a run into calls changes neither the steps nor the result.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tetherlab._jit import njit
+
+from .dop853 import (
+    EPS,
+    H_FLOOR,
+    MAX_BAD_TRIALS,
+    MAX_CONSECUTIVE_REJECTS,
+    MAX_STEPS,
+    NON_FINITE,
+    OK,
+    RHS_FAILED,
+    ST_ACCEPTED,
+    ST_NEWTON_FAIL,
+    ST_NJAC,
+    ST_NLU,
+    ST_NRHS,
+    ST_REJECTED,
+    ST_RHS_STATUS,
+    STEP_UNDERFLOW,
+    UNDERFLOW_FACTOR,
+    all_finite,
+    fill_start_outputs,
+    hinit,
+    scaled_sq,
+)
+from .tableau import (
+    ALPH,
+    BETA,
+    C1,
+    C1M1,
+    C1MC2,
+    C2,
+    C2M1,
+    DD1,
+    DD2,
+    DD3,
+    RADAU_T,
+    RADAU_TI,
+    U1,
+)
+
+# Transformation matrices as scalars (numba folds them into the arithmetic).
+T11, T12, T13 = (float(v) for v in RADAU_T[0])
+T21, T22, T23 = (float(v) for v in RADAU_T[1])
+T31 = float(RADAU_T[2, 0])  # T32 = 1, T33 = 0 (used implicitly below)
+TI11, TI12, TI13 = (float(v) for v in RADAU_TI[0])
+TI21, TI22, TI23 = (float(v) for v in RADAU_TI[1])
+TI31, TI32, TI33 = (float(v) for v in RADAU_TI[2])
+
+# RADAU5 defaults (Hairer's IWORK/WORK defaults).
+NIT = 7  # max Newton iterations per step
+THET = 0.001  # Jacobian is recomputed when the Newton rate exceeds this
+SAFE = 0.9
+QUOT1 = 1.0  # keep h (and the LU) when hnew/h is in [QUOT1, QUOT2]
+QUOT2 = 1.2
+FACL = 5.0  # hnew/h >= 1/FACL
+FACR = 0.125  # hnew/h <= 1/FACR
+MAX_SINGULAR = 5  # consecutive singular matrices before giving up
+
+# Workspace scalar slots (float fs[], int is_[]).
+_F_HOLD = 0
+_F_THETA = 1
+_F_FACCON = 2
+_F_HACC = 3
+_F_ERRACC = 4
+_F_HLU = 5
+_I_FIRST = 0
+_I_NEED_JAC = 1
+_I_LU_VALID = 2
+_I_NACCPT = 3
+_I_NSING = 4
+_I_STARTED = 5
+
+
+def radau5_workspace(n):
+    """Arrays that carry RADAU5's state between calls of :func:`radau5_core`."""
+    return (
+        np.zeros((n, n)),  # fjac
+        np.zeros((n, n)),  # e1 (LU of U1/h - J)
+        np.zeros((n, n), dtype=np.complex128),  # e2 (LU of (ALPH+iBETA)/h - J)
+        np.zeros(n, dtype=np.int64),  # ip1
+        np.zeros(n, dtype=np.int64),  # ip2
+        np.zeros((4, n)),  # cont: y_new and the 3 coefficients of the collocation polynomial
+        np.zeros(n),  # f0 = f(t, y)
+        np.zeros(8),  # float scalars
+        np.zeros(8, dtype=np.int64),  # int scalars
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# Dense LU with partial pivoting (works for float64 and complex128 arrays: numba specialises).
+# --------------------------------------------------------------------------------------------
+@njit(cache=True)
+def lu_factor(a, piv):
+    """In-place LU of a square C-ordered matrix, row pivoting as LAPACK getrf (whole rows are
+    swapped).  Returns 0, or k+1 when column k has no nonzero pivot (singular)."""
+    n = a.shape[0]
+    for k in range(n):
+        pk = k
+        amax = abs(a[k, k])
+        for i in range(k + 1, n):
+            v = abs(a[i, k])
+            if v > amax:
+                amax = v
+                pk = i
+        piv[k] = pk
+        if not amax > 0.0:  # also catches NaN
+            return k + 1
+        if pk != k:
+            for j in range(n):
+                tmp = a[k, j]
+                a[k, j] = a[pk, j]
+                a[pk, j] = tmp
+        inv = 1.0 / a[k, k]
+        for i in range(k + 1, n):
+            lik = a[i, k] * inv
+            a[i, k] = lik
+            if lik != 0.0:
+                for j in range(k + 1, n):
+                    a[i, j] -= lik * a[k, j]
+    return 0
+
+
+@njit(cache=True)
+def lu_solve(a, piv, b):
+    """Solve (LU) x = b in place, with the factors and pivots of :func:`lu_factor`."""
+    n = a.shape[0]
+    for k in range(n):
+        pk = piv[k]
+        if pk != k:
+            tmp = b[k]
+            b[k] = b[pk]
+            b[pk] = tmp
+    for i in range(n):
+        s = b[i]
+        for j in range(i):
+            s -= a[i, j] * b[j]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= a[i, j] * b[j]
+        b[i] = s / a[i, i]
+
+
+@njit(cache=True)
+def _jacobian(rhs, t, y, f0, p, fjac, tmp, stats):
+    """Forward differences, column j with increment sqrt(eps*max(1e-5, |y_j|)) (RADAU5).
+
+    If the model fails at the perturbed state (e.g. a constraint at its boundary), the backward
+    difference is tried before giving up.  Returns 0, a nonzero rhs status, or -1 (non-finite).
+    """
+    n = y.shape[0]
+    for j in range(n):
+        ysafe = y[j]
+        delt = np.sqrt(EPS * max(1e-5, abs(ysafe)))
+        y[j] = ysafe + delt
+        st = rhs(t, y.ctypes, tmp.ctypes, p.ctypes)
+        stats[ST_NRHS] += 1
+        if st != 0:
+            delt = -delt
+            y[j] = ysafe + delt
+            st = rhs(t, y.ctypes, tmp.ctypes, p.ctypes)
+            stats[ST_NRHS] += 1
+        y[j] = ysafe
+        if st != 0:
+            return st
+        for i in range(n):
+            fjac[i, j] = (tmp[i] - f0[i]) / delt
+    stats[ST_NJAC] += 1
+    for i in range(n):
+        if not all_finite(fjac[i]):
+            return -1
+    return 0
+
+
+@njit(cache=True)
+def _decompose(fjac, h, e1, e2, ip1, ip2, stats):
+    """E1 = U1/h I - J and E2 = (ALPH + i BETA)/h I - J, both factorised (one "LU" in stats,
+    as Hairer's NDEC counts the pair)."""
+    n = fjac.shape[0]
+    fac1 = U1 / h
+    alphn = ALPH / h
+    betan = BETA / h
+    for i in range(n):
+        for j in range(n):
+            e1[i, j] = -fjac[i, j]
+            e2[i, j] = -fjac[i, j]
+        e1[i, i] += fac1
+        e2[i, i] += complex(alphn, betan)
+    stats[ST_NLU] += 1
+    ier = lu_factor(e1, ip1)
+    if ier != 0:
+        return ier
+    return lu_factor(e2, ip2)
+
+
+@njit(cache=True)
+def radau5_core(
+    rhs,
+    t,
+    y,
+    t_out,
+    p,
+    rtol,
+    atol,
+    h,
+    h_max,
+    max_steps,
+    y_out,
+    stats,
+    fixed_step,
+    fjac,
+    e1,
+    e2,
+    ip1,
+    ip2,
+    cont,
+    f0,
+    fs,
+    is_,
+    resume,
+):
+    """RADAU5 with an explicit workspace; ``resume`` continues from the state it holds.
+
+    Same contract as :func:`radau5_run` otherwise.  ``max_steps`` counts accepted steps and the
+    call returns right after an accepted step, with everything the next step needs in the
+    workspace, so resumed calls reproduce one long call exactly.
+    """
+    n = y.shape[0]
+    m = t_out.shape[0]
+    n_done = fill_start_outputs(t, y, t_out, y_out)
+    if n_done == m:
+        return OK, t, h, n_done
+    t_end = t_out[m - 1]
+
+    # Hairer's tolerance map (RADAU5 driver, EXPM = 2/3), and Newton's stopping tolerance FNEWT.
+    rtol_i = 0.1 * rtol ** (2.0 / 3.0)
+    atol_i = atol * (rtol_i / rtol)
+    fnewt = max(10.0 * EPS / rtol_i, min(0.03, np.sqrt(rtol_i)))
+    cfac = SAFE * (1 + 2 * NIT)
+    hmax = h_max if h_max > 0.0 else np.inf
+
+    z1 = np.empty(n)
+    z2 = np.empty(n)
+    z3 = np.empty(n)
+    f1 = np.empty(n)
+    f2 = np.empty(n)
+    f3 = np.empty(n)
+    tmp = np.empty(n)
+    scal = np.empty(n)
+    w = np.empty(n, dtype=np.complex128)
+
+    if not (resume and is_[_I_STARTED] != 0):
+        st = rhs(t, y.ctypes, f0.ctypes, p.ctypes)
+        stats[ST_NRHS] += 1
+        if st != 0:
+            stats[ST_RHS_STATUS] = st
+            return RHS_FAILED, t, h, n_done
+        if not all_finite(f0):
+            return NON_FINITE, t, h, n_done
+        if h <= 0.0:
+            if fixed_step:
+                return STEP_UNDERFLOW, t, h, n_done  # the driver rejects this before calling
+            # HINIT with IORD = 4: the local error estimate of RADAU5 behaves like h^4.
+            h = hinit(rhs, t, y, f0, p, rtol_i, atol_i, 4, min(hmax, t_end - t), z1, z2, stats)
+        h = min(h, hmax)
+        fs[_F_HOLD] = h
+        fs[_F_THETA] = THET
+        fs[_F_FACCON] = 1.0
+        fs[_F_HACC] = h
+        fs[_F_ERRACC] = 1e-2
+        fs[_F_HLU] = 0.0
+        is_[_I_FIRST] = 1
+        is_[_I_NEED_JAC] = 1
+        is_[_I_LU_VALID] = 0
+        is_[_I_NACCPT] = 0
+        is_[_I_NSING] = 0
+        is_[_I_STARTED] = 1
+
+    hold = fs[_F_HOLD]
+    theta = fs[_F_THETA]
+    faccon = fs[_F_FACCON]
+    hacc = fs[_F_HACC]
+    erracc = fs[_F_ERRACC]
+    h_lu = fs[_F_HLU]
+    first = is_[_I_FIRST] != 0
+    need_jac = is_[_I_NEED_JAC] != 0
+    lu_valid = is_[_I_LU_VALID] != 0
+    naccpt = is_[_I_NACCPT]
+    nsing = is_[_I_NSING]
+
+    caljac = False  # the Jacobian in fjac was evaluated at the current (t, y)
+    reject = False
+    n_acc = 0
+    n_rej = 0
+    n_bad = 0
+    bad_kind = 0
+    land = 1.0 + 1e-9 if fixed_step else 1.01
+    status = OK
+
+    while True:
+        # ------------------------------------------------ step size for this trial
+        if h < UNDERFLOW_FACTOR * abs(t) or h < H_FLOOR or n_rej >= MAX_CONSECUTIVE_REJECTS:
+            status = bad_kind if (n_rej > 0 and bad_kind != 0) else STEP_UNDERFLOW
+            break
+        h_unclipped = h
+        last = False
+        if t + land * h >= t_end:
+            h = t_end - t
+            last = True
+        xph = t_end if last else t + h
+
+        # ------------------------------------------------ Jacobian and LU (Hairer's 10 / 20)
+        if need_jac:
+            st = _jacobian(rhs, t, y, f0, p, fjac, tmp, stats)
+            if st != 0:
+                if st == -1:
+                    status = NON_FINITE
+                else:
+                    stats[ST_RHS_STATUS] = st
+                    status = RHS_FAILED
+                break
+            need_jac = False
+            caljac = True
+            lu_valid = False
+        if not lu_valid or h != h_lu:
+            ier = _decompose(fjac, h, e1, e2, ip1, ip2, stats)
+            if ier != 0:
+                lu_valid = False
+                nsing += 1
+                if nsing >= MAX_SINGULAR or fixed_step:
+                    status = STEP_UNDERFLOW
+                    break
+                # Hairer's label 78: halve h; the Jacobian is refreshed unless it is current.
+                h = 0.5 * h
+                reject = True
+                stats[ST_REJECTED] += 1
+                n_rej += 1
+                bad_kind = 0
+                need_jac = not caljac
+                continue
+            lu_valid = True
+            h_lu = h
+        fac1 = U1 / h
+        alphn = ALPH / h
+        betan = BETA / h
+
+        for i in range(n):
+            scal[i] = atol_i[i] + rtol_i * abs(y[i])
+
+        # ------------------------------------------------ starting values for Newton
+        if first:
+            for i in range(n):
+                z1[i] = 0.0
+                z2[i] = 0.0
+                z3[i] = 0.0
+                f1[i] = 0.0
+                f2[i] = 0.0
+                f3[i] = 0.0
+        else:
+            # Extrapolate the previous step's collocation polynomial (CONTR5 form).
+            c3q = h / hold
+            c1q = C1 * c3q
+            c2q = C2 * c3q
+            for i in range(n):
+                ak1 = cont[1, i]
+                ak2 = cont[2, i]
+                ak3 = cont[3, i]
+                z1i = c1q * (ak1 + (c1q - C2M1) * (ak2 + (c1q - C1M1) * ak3))
+                z2i = c2q * (ak1 + (c2q - C2M1) * (ak2 + (c2q - C1M1) * ak3))
+                z3i = c3q * (ak1 + (c3q - C2M1) * (ak2 + (c3q - C1M1) * ak3))
+                z1[i] = z1i
+                z2[i] = z2i
+                z3[i] = z3i
+                f1[i] = TI11 * z1i + TI12 * z2i + TI13 * z3i
+                f2[i] = TI21 * z1i + TI22 * z2i + TI23 * z3i
+                f3[i] = TI31 * z1i + TI32 * z2i + TI33 * z3i
+
+        # ------------------------------------------------ simplified Newton iteration
+        newt = 0
+        faccon = max(faccon, EPS) ** 0.8
+        theta = THET
+        dynold = 0.0
+        thqold = 0.0
+        fail = 0  # 0 ok, RHS_FAILED / NON_FINITE, 10 = Newton failure, 11 = Newton too slow
+        hhfac = 1.0
+        while True:
+            if newt >= NIT:
+                fail = 10
+                break
+            # Stage values y + z_k -> f, written back into z_k.
+            for i in range(n):
+                tmp[i] = y[i] + z1[i]
+            st = rhs(t + C1 * h, tmp.ctypes, z1.ctypes, p.ctypes)
+            if st == 0:
+                for i in range(n):
+                    tmp[i] = y[i] + z2[i]
+                st = rhs(t + C2 * h, tmp.ctypes, z2.ctypes, p.ctypes)
+                if st == 0:
+                    for i in range(n):
+                        tmp[i] = y[i] + z3[i]
+                    st = rhs(xph, tmp.ctypes, z3.ctypes, p.ctypes)
+                    stats[ST_NRHS] += 3
+                else:
+                    stats[ST_NRHS] += 2
+            else:
+                stats[ST_NRHS] += 1
+            if st != 0:
+                stats[ST_RHS_STATUS] = st
+                fail = RHS_FAILED
+                break
+            # Right-hand sides of the transformed systems, then the two solves (SLVRAD).
+            for i in range(n):
+                a1 = z1[i]
+                a2 = z2[i]
+                a3 = z3[i]
+                s2 = -f2[i]
+                s3 = -f3[i]
+                z1[i] = -f1[i] * fac1 + TI11 * a1 + TI12 * a2 + TI13 * a3
+                z2[i] = s2 * alphn - s3 * betan + TI21 * a1 + TI22 * a2 + TI23 * a3
+                z3[i] = s3 * alphn + s2 * betan + TI31 * a1 + TI32 * a2 + TI33 * a3
+            lu_solve(e1, ip1, z1)
+            for i in range(n):
+                w[i] = complex(z2[i], z3[i])
+            lu_solve(e2, ip2, w)
+            for i in range(n):
+                z2[i] = w[i].real
+                z3[i] = w[i].imag
+            newt += 1
+            dyno = 0.0
+            for i in range(n):
+                dyno += scaled_sq(z1[i], scal[i]) + scaled_sq(z2[i], scal[i])
+                dyno += scaled_sq(z3[i], scal[i])
+            dyno = np.sqrt(dyno / (3 * n))
+            if not np.isfinite(dyno):
+                fail = NON_FINITE
+                break
+            # Convergence rate; bad convergence or a predicted miss of NIT.
+            if newt > 1 and newt < NIT:
+                thq = dyno / dynold
+                if newt == 2:
+                    theta = thq
+                else:
+                    theta = np.sqrt(thq * thqold)
+                thqold = thq
+                if theta < 0.99:
+                    faccon = theta / (1.0 - theta)
+                    dyth = faccon * dyno * theta ** (NIT - 1 - newt) / fnewt
+                    if dyth >= 1.0 and not fixed_step:
+                        qnewt = max(1e-4, min(20.0, dyth))
+                        hhfac = 0.8 * qnewt ** (-1.0 / (4.0 + NIT - 1 - newt))
+                        fail = 11
+                        break
+                else:
+                    fail = 10
+                    break
+            dynold = max(dyno, EPS)
+            for i in range(n):
+                f1i = f1[i] + z1[i]
+                f2i = f2[i] + z2[i]
+                f3i = f3[i] + z3[i]
+                f1[i] = f1i
+                f2[i] = f2i
+                f3[i] = f3i
+                z1[i] = T11 * f1i + T12 * f2i + T13 * f3i
+                z2[i] = T21 * f1i + T22 * f2i + T23 * f3i
+                z3[i] = T31 * f1i + f2i
+            if faccon * dyno <= fnewt:
+                break
+
+        if fail != 0:
+            if fixed_step:
+                status = STEP_UNDERFLOW if fail >= 10 else fail
+                if fail >= 10:
+                    stats[ST_NEWTON_FAIL] += 1
+                break
+            stats[ST_REJECTED] += 1
+            n_rej += 1
+            reject = True
+            if fail >= 10:
+                stats[ST_NEWTON_FAIL] += 1
+                bad_kind = 0
+                h = h * (hhfac if fail == 11 else 0.5)
+            else:
+                n_bad += 1
+                bad_kind = fail
+                if n_bad >= MAX_BAD_TRIALS:
+                    status = fail
+                    break
+                h = 0.25 * h
+            need_jac = not caljac
+            continue
+
+        # ------------------------------------------------ error estimate (ESTRAD)
+        err = 0.0
+        quot = 1.0
+        if not fixed_step:
+            hee1 = DD1 / h
+            hee2 = DD2 / h
+            hee3 = DD3 / h
+            for i in range(n):
+                f2[i] = hee1 * z1[i] + hee2 * z2[i] + hee3 * z3[i]
+                tmp[i] = f2[i] + f0[i]
+                # Weights for the error test use max(|y|, |y_new|), as the DOP853 kernel and
+                # scipy do; f3 is free here and holds them.
+                f3[i] = atol_i[i] + rtol_i * max(abs(y[i]), abs(y[i] + z3[i]))
+            lu_solve(e1, ip1, tmp)
+            for i in range(n):
+                err += scaled_sq(tmp[i], f3[i])
+            err = max(np.sqrt(err / n), 1e-10)
+            if err >= 1.0 and (first or reject):
+                # Filter the estimate once more with the real system: without this, the
+                # estimate is unbounded for very stiff components (Hairer & Wanner IV.8).
+                for i in range(n):
+                    tmp[i] = y[i] + tmp[i]
+                st = rhs(t, tmp.ctypes, f1.ctypes, p.ctypes)
+                stats[ST_NRHS] += 1
+                if st == 0 and all_finite(f1):
+                    for i in range(n):
+                        tmp[i] = f1[i] + f2[i]
+                    lu_solve(e1, ip1, tmp)
+                    err = 0.0
+                    for i in range(n):
+                        err += scaled_sq(tmp[i], f3[i])
+                    err = max(np.sqrt(err / n), 1e-10)
+                # (If that probe fails, the unfiltered estimate stands: it is >= 1, so the
+                # step is rejected either way.)
+            if not np.isfinite(err):
+                stats[ST_REJECTED] += 1
+                n_rej += 1
+                n_bad += 1
+                bad_kind = NON_FINITE
+                reject = True
+                if n_bad >= MAX_BAD_TRIALS:
+                    status = NON_FINITE
+                    break
+                h = 0.25 * h
+                need_jac = not caljac
+                continue
+            fac = min(SAFE, cfac / (newt + 2 * NIT))
+            quot = max(FACR, min(FACL, err**0.25 / fac))
+        hnew = h / quot
+
+        if err < 1.0:
+            # f at the new point before committing (it is the next step's f0 and Jacobian base):
+            # if the model fails there the step is rejected, not half-accepted.
+            for i in range(n):
+                tmp[i] = y[i] + z3[i]
+            st = rhs(xph, tmp.ctypes, f1.ctypes, p.ctypes)
+            stats[ST_NRHS] += 1
+            fail = 0
+            if st != 0:
+                stats[ST_RHS_STATUS] = st
+                fail = RHS_FAILED
+            elif not (all_finite(f1) and all_finite(tmp)):
+                fail = NON_FINITE
+            if fail != 0:
+                if fixed_step:
+                    status = fail
+                    break
+                stats[ST_REJECTED] += 1
+                n_rej += 1
+                n_bad += 1
+                bad_kind = fail
+                reject = True
+                if n_bad >= MAX_BAD_TRIALS:
+                    status = fail
+                    break
+                h = 0.25 * h
+                need_jac = not caljac
+                continue
+
+            # ---------------------------------------------- accept
+            first = False
+            naccpt += 1
+            if not fixed_step:
+                # Predictive controller of Gustafsson (RADAU5, PRED = true).
+                if naccpt > 1:
+                    facgus = (hacc / h) * (err * err / erracc) ** 0.25 / SAFE
+                    facgus = max(FACR, min(FACL, facgus))
+                    quot = max(quot, facgus)
+                    hnew = h / quot
+                hacc = h
+                erracc = max(1e-2, err)
+            hold = h
+            t = xph
+            for i in range(n):
+                y[i] = tmp[i]
+                f0[i] = f1[i]
+                z1i = z1[i]
+                z2i = z2[i]
+                c1 = (z2i - z3[i]) / C2M1
+                ak = (z1i - z2i) / C1MC2
+                acont3 = (ak - z1i / C1) / C2
+                c2 = (ak - c1) / C1M1
+                cont[0, i] = y[i]
+                cont[1, i] = c1
+                cont[2, i] = c2
+                cont[3, i] = c2 - acont3
+            # Outputs inside the step from the collocation polynomial, s = (t_o - t)/h in [-1, 0).
+            while n_done < m and t_out[n_done] < t:
+                s = (t_out[n_done] - t) / hold
+                row = y_out[n_done]
+                for i in range(n):
+                    row[i] = cont[0, i] + s * (
+                        cont[1, i] + (s - C2M1) * (cont[2, i] + (s - C1M1) * cont[3, i])
+                    )
+                n_done += 1
+            while n_done < m and t_out[n_done] <= t:
+                y_out[n_done, :] = y
+                n_done += 1
+            stats[ST_ACCEPTED] += 1
+            n_acc += 1
+            n_rej = 0
+            n_bad = 0
+            bad_kind = 0
+            nsing = 0
+            caljac = False
+
+            hnew = min(hnew, hmax)
+            if fixed_step:
+                hnew = h_unclipped
+            hopt = hnew
+            if reject:
+                hnew = min(hnew, h)
+            reject = False
+            need_jac = theta > THET
+            if last:
+                h = min(max(hopt, h_unclipped), hmax)
+                status = OK
+                break
+            qt = hnew / h
+            if not (theta <= THET and qt >= QUOT1 and qt <= QUOT2):
+                h = hnew  # else keep h: the LU factors stay valid (Hairer's label 30)
+            if n_acc >= max_steps:
+                status = MAX_STEPS
+                break
+        else:
+            # ---------------------------------------------- reject (error test)
+            reject = True
+            if first:
+                h = 0.1 * h
+            else:
+                h = hnew
+            stats[ST_REJECTED] += 1
+            n_rej += 1
+            bad_kind = 0
+            need_jac = not caljac
+
+    fs[_F_HOLD] = hold
+    fs[_F_THETA] = theta
+    fs[_F_FACCON] = faccon
+    fs[_F_HACC] = hacc
+    fs[_F_ERRACC] = erracc
+    fs[_F_HLU] = h_lu
+    is_[_I_FIRST] = 1 if first else 0
+    is_[_I_NEED_JAC] = 1 if need_jac else 0
+    is_[_I_LU_VALID] = 1 if lu_valid else 0
+    is_[_I_NACCPT] = naccpt
+    is_[_I_NSING] = nsing
+    return status, t, h, n_done
+
+
+@njit(cache=True)
+def radau5_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats, fixed_step):
+    """Kernel ABI entry: RADAU5 from a fresh start (new Jacobian, zero Newton predictor).
+
+    A caller continuing from (t_end, y, h_next) gets a valid but not bit-identical continuation,
+    because the Jacobian, LU factors and Newton predictor are rebuilt; use :func:`radau5_core`
+    with a workspace (as the driver does) for exact continuation.
+    """
+    n = y.shape[0]
+    fjac = np.zeros((n, n))
+    e1 = np.zeros((n, n))
+    e2 = np.zeros((n, n), dtype=np.complex128)
+    ip1 = np.zeros(n, dtype=np.int64)
+    ip2 = np.zeros(n, dtype=np.int64)
+    cont = np.zeros((4, n))
+    f0 = np.zeros(n)
+    fs = np.zeros(8)
+    is_ = np.zeros(8, dtype=np.int64)
+    return radau5_core(
+        rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats, fixed_step,
+        fjac, e1, e2, ip1, ip2, cont, f0, fs, is_, False,
+    )  # fmt: skip
