@@ -208,3 +208,13 @@ def direction_from_angles(r, v, theta, phi, side: float = 1.0) -> np.ndarray:
     frame = orbital_frame(np.atleast_2d(r), np.atleast_2d(v))[0]
     e = side * np.array([math.cos(phi) * math.cos(theta), math.cos(phi) * math.sin(theta), math.sin(phi)])
     return frame.T @ e
+
+
+def zero_crossing_frequency(t: np.ndarray, x: np.ndarray) -> float:
+    """Angular frequency (rad/s) from the mean spacing of the zero crossings of x(t)."""
+    s = np.sign(x)
+    idx = np.where(s[:-1] * s[1:] < 0)[0]
+    if len(idx) < 3:
+        raise ValueError(f"only {len(idx)} zero crossings: run longer")
+    tz = t[idx] - x[idx] * (t[idx + 1] - t[idx]) / (x[idx + 1] - x[idx])
+    return math.pi / ((tz[-1] - tz[0]) / (len(tz) - 1))

@@ -26,15 +26,9 @@ SCENES = ROOT / "studies" / "scenes"
 MU_EARTH = 3.986004418e14  # the "earth" preset of tetherlab/scene.py
 
 
-def _freq(t, x):
-    s = np.sign(x)
-    idx = np.where(s[:-1] * s[1:] < 0)[0]
-    tz = t[idx] - x[idx] * (t[idx + 1] - t[idx]) / (x[idx + 1] - x[idx])
-    return math.pi / ((tz[-1] - tz[0]) / (len(tz) - 1))
-
-
 def check_libration(rows_out):
     from .scene import load_scene
+    from .diagnostics import zero_crossing_frequency
     from .pipeline import simulate
 
     worst = {"in": 0.0, "out": 0.0}
@@ -54,7 +48,7 @@ def check_libration(rows_out):
             w = math.sqrt(MU_EARTH / d["com_radius_m"].iloc[0] ** 3)
             col = "main.theta_rad" if plane == "in" else "main.phi_rad"
             expected = math.sqrt(3) * w if plane == "in" else 2 * w
-            err = abs(_freq(d["t_s"].to_numpy(), d[col].to_numpy()) / expected - 1)
+            err = abs(zero_crossing_frequency(d["t_s"].to_numpy(), d[col].to_numpy()) / expected - 1)
             rows_out.append({"case": f"{plane}-plane libration, n={n}", "frequency/expected - 1": err})
             worst[plane] = max(worst[plane], err)
     return {"libration_inplane_frequency": worst["in"], "libration_outofplane_frequency": worst["out"]}

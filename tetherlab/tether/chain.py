@@ -148,6 +148,7 @@ def rod_forces(t, q, qd, p):
         n = int(p[tb + TT_NRODS])
         g0 = int(p[tb + TT_ROD0])
         energy = int(p[tb + TT_MODEL]) == MODEL_ENERGY
+        printed = int(p[tb + TT_MODEL]) == MODEL_PRINTED
         # end A of the first rod sits on the root body (eq. 36)
         ax = q[0]
         ay = q[1]
@@ -229,21 +230,17 @@ def rod_forces(t, q, qd, p):
                 qx = qlx - 2.0 * SQ3 * fe * ux
                 qy = qly - 2.0 * SQ3 * fe * uy
                 qz = qlz - 2.0 * SQ3 * fe * uz
-            elif int(p[tb + TT_MODEL]) == MODEL_PRINTED:
-                # eq. 26 with eq. 20 exactly as printed, J_2 = I - (sqrt3 - 1) J(u): kept only to
-                # show in docs/model.md what the printed sign does (wrong transverse inertia)
-                c1 = 2.0 - SQ3
-                c2 = SQ3 - 1.0
-                ax_ = (r2x - r1x) * ux + (r2y - r1y) * uy + (r2z - r1z) * uz
-                ql_u = qlx * ux + qly * uy + qlz * uz
-                qx = ax_ * ux + (qlx - ql_u * ux) - 2.0 * fe * ux
-                qy = ax_ * uy + (qly - ql_u * uy) - 2.0 * fe * uy
-                qz = ax_ * uz + (qlz - ql_u * uz) - 2.0 * fe * uz
             else:
                 # paper eq. 26: axial part (R_2 - R_1).u, transverse part R_2 - R_1 + 2 F_TP with
-                # F_TP of eq. 13, which reduces to J(u) Q_lag (docs/model.md, section 3)
-                c1 = SQ3
-                c2 = 1.0 - SQ3
+                # F_TP of eq. 13, which reduces to J(u) Q_lag (docs/model.md, section 3).
+                # C = J_2 = c1 I + c2 u u^T with eq. 20's sign corrected; "printed" keeps eq. 20
+                # exactly as printed (wrong transverse inertia), only for docs/model.md's evidence.
+                if printed:
+                    c1 = 2.0 - SQ3
+                    c2 = SQ3 - 1.0
+                else:
+                    c1 = SQ3
+                    c2 = 1.0 - SQ3
                 ax_ = (r2x - r1x) * ux + (r2y - r1y) * uy + (r2z - r1z) * uz
                 ql_u = qlx * ux + qly * uy + qlz * uz
                 qx = ax_ * ux + (qlx - ql_u * ux) - 2.0 * fe * ux
