@@ -312,6 +312,29 @@ def test_van_der_pol_stiff():
     assert np.all(np.abs(slow.y - ref.y) <= 1e-3 * (1.0 + np.abs(ref.y)))
 
 
+@pytest.mark.parametrize("problem", ["kepler", "vdp"])
+def test_radau5_reduced_newton_systems_match_full_ones(problem):
+    # With second_order=True RADAU5 factorises the m1 x m1 matrix g I - A_v - A_q/g instead of
+    # the n x n matrix g I - J (Hairer's M1 = M2 structure).  That is the same linear algebra
+    # done in another order, so the solution must agree with the full-size solve to round-off
+    # amplified by the Newton stopping test, and the step sequence must match.
+    if problem == "kepler":
+        rhs, y0, t_out, p, tol = kepler, Y0_KEPLER, np.linspace(0.0, PERIOD, 9), NO_P, 1e-9
+    else:  # stiff: the reduced matrix must carry A_q / g correctly when J is large
+        rhs, y0, t_out, p, tol = vdp, [2.0, 0.0], np.linspace(0.0, 2000.0, 21), np.array([1000.0]), 1e-8
+    full = integrate("radau5", rhs, 0.0, y0, t_out, p, tol, tol)
+    red = integrate("radau5", rhs, 0.0, y0, t_out, p, tol, tol, second_order=True)
+    assert full.status == 0 and red.status == 0
+    rtol_i = 0.1 * tol ** (2.0 / 3.0)  # RADAU5's internal tolerance
+    assert np.max(np.abs(red.y - full.y) / (rtol_i * (1.0 + np.abs(full.y)))) < 1e-2
+    assert abs(red.stats["n_accepted"] - full.stats["n_accepted"]) <= 0.02 * full.stats["n_accepted"]
+
+
+def test_second_order_needs_an_even_state():
+    with pytest.raises(ValueError, match="second_order"):
+        integrate("radau5", osc, 0.0, [1.0, 0.0, 0.0], [1.0], NO_P, 1e-6, 1e-6, second_order=True)
+
+
 # ------------------------------------------------------------------------------------------------
 # failures
 # ------------------------------------------------------------------------------------------------

@@ -384,6 +384,7 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
         h_max=prep.h_max,
         max_steps=prep.max_steps,
         progress=bar.update,
+        second_order=True,  # Cowell: y = [q, q'], so RADAU5 can halve its Newton systems
     )
     bar.close()
     stats = dict(res.stats)

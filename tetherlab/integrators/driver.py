@@ -247,7 +247,7 @@ def status_message(status, t_end, h, rhs_status, n_newton_fail, max_steps):
 
 
 def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_steps=10**7,
-              chunk_seconds=0.5, progress=None, fixed_step=False):  # fmt: skip
+              chunk_seconds=0.5, progress=None, fixed_step=False, second_order=False):  # fmt: skip
     """Integrate y' = rhs(t, y; p) from t0 and return the solution at the times ``t_out``.
 
     ``method``: one of :data:`METHODS`.  ``rhs``: a cfunc with :data:`tetherlab._jit.RHS_SIG`.
@@ -256,7 +256,9 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     automatic); ``h_max``: largest step (0: unlimited); ``max_steps``: accepted-step budget of
     the whole run.  ``progress(t)`` is called after each chunk of about ``chunk_seconds``.
     ``fixed_step``: constant steps of ``h0`` without error control (native methods only; for
-    convergence studies).  Never raises for a failure of the integration itself: that is
+    convergence studies).  ``second_order``: the state is y = [q, v] with q' = v exactly (Cowell);
+    RADAU5 then solves reduced Newton systems of half the size (same steps, less linear
+    algebra); other methods ignore it.  Never raises for a failure of the integration itself: that is
     reported in the result's ``status``/``message``, with every output computed before it.
     """
     t0, y, tt, rtol, atol_v, h0, h_max, max_steps, chunk_seconds, fixed_step = _validate(
@@ -274,7 +276,11 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     compile_s = warm_up(method, rhs, n, p)
     y_out = np.empty((m, n))
     stats = np.zeros(8, dtype=np.int64)
-    ws = radau5_workspace(n) if method == "radau5" else ()
+    if not isinstance(second_order, (bool, np.bool_)):
+        raise ValueError(f"second_order: expected a bool; got {second_order!r}")
+    if second_order and n % 2:
+        raise ValueError(f"second_order: expected an even state length (y = [q, v]); got {n}")
+    ws = radau5_workspace(n, n // 2 if second_order else 0) if method == "radau5" else ()
 
     t = t0
     h = h0

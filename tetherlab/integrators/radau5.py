@@ -81,7 +81,7 @@ TI31, TI32, TI33 = (float(v) for v in RADAU_TI[2])
 
 # RADAU5 defaults (Hairer's IWORK/WORK defaults).
 NIT = 7  # max Newton iterations per step
-THET = 0.001  # Jacobian is recomputed when the Newton rate exceeds this
+THET = 0.01  # Jacobian is recomputed when the Newton rate exceeds this
 SAFE = 0.9
 QUOT1 = 1.0  # keep h (and the LU) when hnew/h is in [QUOT1, QUOT2]
 QUOT2 = 1.2
@@ -102,21 +102,33 @@ _I_LU_VALID = 2
 _I_NACCPT = 3
 _I_NSING = 4
 _I_STARTED = 5
+_I_M1 = 6  # second-order structure: y'_i = y_{i+M1} for i < M1 (0 = none), set by the workspace
 
 
-def radau5_workspace(n):
-    """Arrays that carry RADAU5's state between calls of :func:`radau5_core`."""
-    return (
+def radau5_workspace(n, m1=0):
+    """Arrays that carry RADAU5's state between calls of :func:`radau5_core`.
+
+    ``m1 > 0`` declares Hairer's special structure (RADAU5's M1 = M2): n = 2 m1 and the first m1
+    components have the next m1 as their exact derivatives (y = [q, v], q' = v, as in Cowell's
+    formulation).  Then J = [[0, I], [A_q, A_v]] and both Newton systems reduce to m1 x m1 ones
+    (docs/integrators.md): the LU work falls by 8x and each solve by about 4x.
+    """
+    if m1 < 0 or (m1 > 0 and n != 2 * m1):
+        raise ValueError(f"m1: expected 0 or n/2 = {n / 2:g} (second-order structure); got {m1}")
+    ne = n - m1
+    ws = (
         np.zeros((n, n)),  # fjac
-        np.zeros((n, n)),  # e1 (LU of U1/h - J)
-        np.zeros((n, n), dtype=np.complex128),  # e2 (LU of (ALPH+iBETA)/h - J)
-        np.zeros(n, dtype=np.int64),  # ip1
-        np.zeros(n, dtype=np.int64),  # ip2
+        np.zeros((ne, ne)),  # e1 (LU of U1/h - J, or of its reduced form)
+        np.zeros((ne, ne), dtype=np.complex128),  # e2 (LU of (ALPH+iBETA)/h - J, or reduced)
+        np.zeros(ne, dtype=np.int64),  # ip1
+        np.zeros(ne, dtype=np.int64),  # ip2
         np.zeros((4, n)),  # cont: y_new and the 3 coefficients of the collocation polynomial
         np.zeros(n),  # f0 = f(t, y)
         np.zeros(8),  # float scalars
         np.zeros(8, dtype=np.int64),  # int scalars
     )
+    ws[8][_I_M1] = m1
+    return ws
 
 
 # --------------------------------------------------------------------------------------------
@@ -207,24 +219,59 @@ def _jacobian(rhs, t, y, f0, p, fjac, tmp, stats):
 
 
 @njit(cache=True)
-def _decompose(fjac, h, e1, e2, ip1, ip2, stats):
+def _decompose(fjac, h, e1, e2, ip1, ip2, stats, m1):
     """E1 = U1/h I - J and E2 = (ALPH + i BETA)/h I - J, both factorised (one "LU" in stats,
-    as Hairer's NDEC counts the pair)."""
+    as Hairer's NDEC counts the pair).
+
+    With the second-order structure (m1 > 0, J = [[0, I], [A_q, A_v]]) the system
+    (g I - J) [z_q; z_v] = [b_q; b_v] is equivalent to z_q = (b_q + z_v)/g and
+    (g I - A_v - A_q/g) z_v = b_v + A_q b_q/g: only the m1 x m1 matrix g I - A_v - A_q/g is
+    factorised (Hairer's DECOMR/DECOMC with M1 = M2).
+    """
     n = fjac.shape[0]
     fac1 = U1 / h
-    alphn = ALPH / h
-    betan = BETA / h
-    for i in range(n):
-        for j in range(n):
-            e1[i, j] = -fjac[i, j]
-            e2[i, j] = -fjac[i, j]
-        e1[i, i] += fac1
-        e2[i, i] += complex(alphn, betan)
+    fac2 = complex(ALPH / h, BETA / h)
+    if m1 == 0:
+        for i in range(n):
+            for j in range(n):
+                e1[i, j] = -fjac[i, j]
+                e2[i, j] = -fjac[i, j]
+            e1[i, i] += fac1
+            e2[i, i] += fac2
+    else:
+        inv1 = 1.0 / fac1
+        inv2 = 1.0 / fac2
+        for i in range(m1):
+            for j in range(m1):
+                aq = fjac[m1 + i, j]
+                av = fjac[m1 + i, m1 + j]
+                e1[i, j] = -av - aq * inv1
+                e2[i, j] = -av - aq * inv2
+            e1[i, i] += fac1
+            e2[i, i] += fac2
     stats[ST_NLU] += 1
     ier = lu_factor(e1, ip1)
     if ier != 0:
         return ier
     return lu_factor(e2, ip2)
+
+
+@njit(cache=True)
+def _solve(e, ip, fjac, g, m1, b):
+    """Solve (g I - J) x = b in place with the factors of :func:`_decompose` (real or complex
+    g and b alike), using the reduced form when m1 > 0."""
+    if m1 == 0:
+        lu_solve(e, ip, b)
+        return
+    inv = 1.0 / g
+    for i in range(m1):
+        s = 0.0 * b[0]
+        for j in range(m1):
+            s += fjac[m1 + i, j] * b[j]
+        b[m1 + i] += s * inv
+    lu_solve(e, ip, b[m1:])
+    for i in range(m1):
+        b[i] = (b[i] + b[m1 + i]) * inv
 
 
 @njit(cache=True)
@@ -265,6 +312,7 @@ def radau5_core(
     if n_done == m:
         return OK, t, h, n_done
     t_end = t_out[m - 1]
+    m1 = is_[_I_M1]
 
     # Hairer's tolerance map (RADAU5 driver, EXPM = 2/3), and Newton's stopping tolerance FNEWT.
     rtol_i = 0.1 * rtol ** (2.0 / 3.0)
@@ -357,7 +405,7 @@ def radau5_core(
             caljac = True
             lu_valid = False
         if not lu_valid or h != h_lu:
-            ier = _decompose(fjac, h, e1, e2, ip1, ip2, stats)
+            ier = _decompose(fjac, h, e1, e2, ip1, ip2, stats, m1)
             if ier != 0:
                 lu_valid = False
                 nsing += 1
@@ -377,6 +425,7 @@ def radau5_core(
         fac1 = U1 / h
         alphn = ALPH / h
         betan = BETA / h
+        fac2 = complex(alphn, betan)
 
         for i in range(n):
             scal[i] = atol_i[i] + rtol_i * abs(y[i])
@@ -452,10 +501,10 @@ def radau5_core(
                 z1[i] = -f1[i] * fac1 + TI11 * a1 + TI12 * a2 + TI13 * a3
                 z2[i] = s2 * alphn - s3 * betan + TI21 * a1 + TI22 * a2 + TI23 * a3
                 z3[i] = s3 * alphn + s2 * betan + TI31 * a1 + TI32 * a2 + TI33 * a3
-            lu_solve(e1, ip1, z1)
+            _solve(e1, ip1, fjac, fac1, m1, z1)
             for i in range(n):
                 w[i] = complex(z2[i], z3[i])
-            lu_solve(e2, ip2, w)
+            _solve(e2, ip2, fjac, fac2, m1, w)
             for i in range(n):
                 z2[i] = w[i].real
                 z3[i] = w[i].imag
@@ -537,7 +586,7 @@ def radau5_core(
                 # Weights for the error test use max(|y|, |y_new|), as the DOP853 kernel and
                 # scipy do; f3 is free here and holds them.
                 f3[i] = atol_i[i] + rtol_i * max(abs(y[i]), abs(y[i] + z3[i]))
-            lu_solve(e1, ip1, tmp)
+            _solve(e1, ip1, fjac, fac1, m1, tmp)
             for i in range(n):
                 err += scaled_sq(tmp[i], f3[i])
             err = max(np.sqrt(err / n), 1e-10)
@@ -551,7 +600,7 @@ def radau5_core(
                 if st == 0 and all_finite(f1):
                     for i in range(n):
                         tmp[i] = f1[i] + f2[i]
-                    lu_solve(e1, ip1, tmp)
+                    _solve(e1, ip1, fjac, fac1, m1, tmp)
                     err = 0.0
                     for i in range(n):
                         err += scaled_sq(tmp[i], f3[i])
