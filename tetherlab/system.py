@@ -102,8 +102,15 @@ def build_model(
     nrods = sum(t.rods for t in tethers)
     n_state = 6 * (1 + nrods)
 
+    # What an effect with per-body or per-tether parameters needs to lay them out in kernel order:
+    # body index 0 is the root, 1 + k the tip of tether k (the ``body`` argument of body_force).
+    ctx = {
+        "bodies": [root_name] + [t.tip_name for t in tethers],
+        "tethers": list(tethers),
+        "root_fixed": root_fixed,
+    }
     eff_params: list[list[float]] = [
-        list(spec.pack(params, central)) if spec.pack else [] for spec, params in effects
+        list(spec.pack(params, central, ctx)) if spec.pack else [] for spec, params in effects
     ]
     sizes = {
         "eff": len(effects) * L.ET_SIZE + sum(len(x) for x in eff_params),

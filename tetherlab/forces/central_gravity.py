@@ -21,7 +21,7 @@ SPEC = register(
         params={},
         velocity_dependent=False,
         conservative=True,
-        pack=lambda params, central: [central["mu_m3_s2"]],
+        pack=lambda params, central, ctx: [central["mu_m3_s2"]],
     )
 )
 

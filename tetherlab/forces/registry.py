@@ -38,8 +38,10 @@ class EffectSpec:
     velocity_dependent: bool = False
     conservative: bool = False
     # Packs the validated SI parameters (and the scene's central body) into the float block the
-    # kernel reads.  Signature: pack(params_si: dict[str, float], central: dict[str, float]) -> list[float]
-    pack: Callable[[dict, dict], list] | None = None
+    # kernel reads.  Signature: pack(params_si, central, ctx) -> list[float], with
+    # central = {"mu_m3_s2", "radius_m"} and ctx = {"bodies": names in kernel body order (0 = root,
+    # 1 + k = tip of tether k), "tethers": [TetherSpec], "root_fixed": bool}.
+    pack: Callable[[dict, dict, dict], list] | None = None
 
 
 EFFECTS: dict[str, EffectSpec] = {}

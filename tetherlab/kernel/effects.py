@@ -6,9 +6,12 @@ indexed by the effect code (``H_OFF_CNT``), which the tests use to prove it.
 
 Two entry points, because a point mass and a stretch of tether feel effects differently:
 
-* :func:`body_force` -- total force on a point mass (N);
+* :func:`body_force` -- total force on a point mass (N); ``body`` is the body's index in the
+  model (0 = the root body, 1 + k = the tip body of tether k), for effects with per-body
+  parameters (drag area, ...);
 * :func:`rod_force_density` -- force per unit of the rod coordinate xi in [-1, 1] on a rod element
-  at position r, velocity v, with tangent dr/dxi and mass per unit xi (N); the half-rod totals R_1,
+  at position r, velocity v, with tangent dr/dxi and mass per unit xi (N); ``rod`` is the global
+  rod index (RT_TETH of the rod table gives its tether); the half-rod totals R_1,
   R_2 and the moment M_G of paper eq. 9-13 are quadratures of it (docs/model.md, section 3).
 
 Adding an effect = one module in tetherlab/forces/ + one branch in each function below.
@@ -22,7 +25,7 @@ from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_CNT, H_OFF_EFF
 
 
 @njit(cache=True)
-def body_force(p, t, x, y, z, vx, vy, vz, mass):
+def body_force(p, t, body, x, y, z, vx, vy, vz, mass):
     neff = int(p[H_NEFF])
     off = int(p[H_OFF_EFF])
     cnt = int(p[H_OFF_CNT])
@@ -42,7 +45,7 @@ def body_force(p, t, x, y, z, vx, vy, vz, mass):
 
 
 @njit(cache=True)
-def rod_force_density(p, t, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
+def rod_force_density(p, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
     neff = int(p[H_NEFF])
     off = int(p[H_OFF_EFF])
     cnt = int(p[H_OFF_CNT])

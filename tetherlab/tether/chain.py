@@ -199,7 +199,7 @@ def rod_forces(t, q, qd, p):
                 w = p[offq + 2 * nq + j]
                 s = 1.0 + xi
                 fx, fy, fz = rod_force_density(
-                    p, t,
+                    p, t, g,
                     ax + s * tx, ay + s * ty, az + s * tz,
                     avx + s * SQ3 * ddx, avy + s * SQ3 * ddy, avz + s * SQ3 * ddz,
                     tx, ty, tz, mxi,
@@ -325,7 +325,7 @@ def accelerations(t, q, qd, p, acc):
 
     # root body: external force, and the 3x3 system (m0 I + sum W_k) a0 = R0 - sum W_k s0_k
     if inv_m0 > 0.0:
-        r0x, r0y, r0z = body_force(p, t, q[0], q[1], q[2], qd[0], qd[1], qd[2], m0)
+        r0x, r0y, r0z = body_force(p, t, 0, q[0], q[1], q[2], qd[0], qd[1], qd[2], m0)
     else:
         r0x = 0.0
         r0y = 0.0
@@ -354,7 +354,7 @@ def accelerations(t, q, qd, p, acc):
         # tip body force
         if has_tip:
             fx_, fy_, fz_, fvx, fvy, fvz = tip_position_velocity(q, qd, p, k)
-            rfx, rfy, rfz = body_force(p, t, fx_, fy_, fz_, fvx, fvy, fvz, mf)
+            rfx, rfy, rfz = body_force(p, t, 1 + k, fx_, fy_, fz_, fvx, fvy, fvz, mf)
         else:
             rfx = 0.0
             rfy = 0.0
