@@ -336,6 +336,100 @@ def test_second_order_needs_an_even_state():
 
 
 # ------------------------------------------------------------------------------------------------
+# events
+# ------------------------------------------------------------------------------------------------
+@rhs_cfunc
+def osc_events(t, y, g, p):
+    # g0 = x (zero at t = pi/2 + k pi for x = cos t), g1 = x - 0.5 (zero at t = pi/3, 5pi/3, ...)
+    g[0] = y[0]
+    g[1] = y[0] - 0.5
+    return 0
+
+
+@rhs_cfunc
+def kinked_osc(t, y, dydt, p):
+    # x'' = -x for x >= 0 and x'' = -4 x for x < 0: a kink in the force at x = 0, like a tether
+    # going slack.  From x = 1, x' = 0: x = cos t until t = pi/2 (x' = -1), then
+    # x = -sin(2 (t - pi/2))/2 until t = pi/2 + pi/2 = pi (x' = 1), then x = sin(t - pi): the
+    # period is 3 pi / 2 and the solution is exact piecewise.
+    dydt[0] = y[1]
+    dydt[1] = -y[0] if y[0] >= 0.0 else -4.0 * y[0]
+    return 0
+
+
+def kinked_exact(t):
+    t = np.mod(np.atleast_1d(t), 1.5 * math.pi)
+    x = np.where(t < math.pi / 2, np.cos(t),
+                 np.where(t < math.pi, -0.5 * np.sin(2.0 * (t - math.pi / 2)), np.sin(t - math.pi)))
+    return x
+
+
+@rhs_cfunc
+def x_event(t, y, g, p):
+    g[0] = y[0]
+    return 0
+
+
+@pytest.mark.parametrize("method", ["dop853", "radau5"])
+def test_events_are_located_to_round_off_and_outputs_are_untouched(method):
+    # x = cos t crosses 0.5 at pi/3 and 5 pi/3 and 0 at pi/2 and 3 pi/2 (exact).
+    t_out = np.linspace(0.0, 6.0, 61)
+    plain = integrate(method, osc, 0.0, [1.0, 0.0], t_out, NO_P, 1e-12, 1e-12)
+    res = integrate(method, osc, 0.0, [1.0, 0.0], t_out, NO_P, 1e-12, 1e-12, event=osc_events,
+                    n_events=2)  # fmt: skip
+    assert res.status == 0 and res.stopped_by is None
+    got = [(round(t, 9), k, side) for t, k, side in res.events]
+    pi = math.pi
+    want = [(round(pi / 3, 9), 1, -1), (round(pi / 2, 9), 0, -1), (round(3 * pi / 2, 9), 0, 1),
+            (round(5 * pi / 3, 9), 1, 1)]  # fmt: skip
+    assert [(k, s) for _, k, s in got] == [(k, s) for _, k, s in want]
+    exact = [pi / 3, pi / 2, 3 * pi / 2, 5 * pi / 3]
+    # Located within the integration error of x (<= 1e-9 here; bracket width is ~1e-14 s).
+    assert max(abs(t - te) for (t, _, _), te in zip(res.events, exact)) < 1e-8
+    assert np.array_equal(res.t, t_out)
+    np.testing.assert_allclose(res.y, osc_exact(t_out), atol=1e-8)  # y = cos t
+    # Restarts change the steps, not the answer: same as without events to the tolerance.
+    np.testing.assert_allclose(res.y, plain.y, atol=1e-8)
+
+
+@pytest.mark.parametrize("method", ["dop853", "radau5"])
+def test_kink_at_event_keeps_full_accuracy(method):
+    # Without event location a step straddles each kink of kinked_osc and its dense output
+    # and error estimate see a non-smooth solution; with it, every step lies on one branch.
+    t_out = np.linspace(0.0, 6 * math.pi, 121)
+    res = integrate(method, kinked_osc, 0.0, [1.0, 0.0], t_out, NO_P, 1e-11, 1e-11,
+                    event=x_event, n_events=1)  # fmt: skip
+    assert res.status == 0
+    assert len(res.events) == 8  # two kinks per period of 3 pi/2, 4 periods
+    err = np.max(np.abs(res.y[:, 0] - kinked_exact(t_out)))
+    tol_i = 1e-11 if method == "dop853" else 0.1 * 1e-11 ** (2.0 / 3.0)
+    assert err < 100 * tol_i, err  # measured in units of the (internal) tolerance
+
+
+@pytest.mark.parametrize("method", ["dop853", "radau5"])
+def test_terminal_event_stops_with_the_stop_state_last(method):
+    t_out = np.linspace(0.0, 6.0, 7)
+    res = integrate(method, osc, 0.0, [1.0, 0.0], t_out, NO_P, 1e-12, 1e-12, event=osc_events,
+                    n_events=2, terminal=(True, False))  # fmt: skip
+    assert res.status == 0 and res.stopped_by == 0
+    assert "terminal event 0" in res.message
+    # outputs 0 and 1 s, then the stop at pi/2 where x = cos t = 0
+    np.testing.assert_allclose(res.t, [0.0, 1.0, math.pi / 2], atol=1e-9)
+    assert abs(res.y[-1, 0]) < 1e-9 and abs(res.y[-1, 1] + 1.0) < 1e-9
+
+
+def test_event_arguments_are_checked():
+    with pytest.raises(ValueError, match="event"):
+        integrate("scipy:DOP853", osc, 0.0, [1.0, 0.0], [1.0], NO_P, 1e-6, 1e-6, event=x_event,
+                  n_events=1)  # fmt: skip
+    with pytest.raises(ValueError, match="n_events"):
+        integrate("dop853", osc, 0.0, [1.0, 0.0], [1.0], NO_P, 1e-6, 1e-6, event=x_event)
+    with pytest.raises(ValueError, match="terminal"):
+        integrate("dop853", osc, 0.0, [1.0, 0.0], [1.0], NO_P, 1e-6, 1e-6, event=x_event,
+                  n_events=1, terminal=(True, True))  # fmt: skip
+
+
+# ------------------------------------------------------------------------------------------------
 # failures
 # ------------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("method", ["dop853", "radau5"])
@@ -400,7 +494,8 @@ def test_radau5_workspace_continuation_is_bitwise_and_plain_restart_is_close():
     y_ref = np.array([2.0, 0.0])
     st_ref = np.zeros(8, dtype=np.int64)
     s, _, _, _ = radau5_core(vdp, 0.0, y_ref, t_out, mu, 1e-7, atol, 0.0, 0.0, 10**6, ref,
-                             st_ref, False, *radau5_workspace(2), False)  # fmt: skip
+                             st_ref, False, *radau5_workspace(2), False, vdp, 0,
+                             np.array([0.0, -1.0, -1.0, 0.0]))  # fmt: skip
     assert s == 0
 
     ws = radau5_workspace(2)
@@ -410,7 +505,8 @@ def test_radau5_workspace_continuation_is_bitwise_and_plain_restart_is_close():
     t, h, done, resume = 0.0, 0.0, 0, False
     while True:
         s, t, h, nd = radau5_core(vdp, t, y, t_out[done:], mu, 1e-7, atol, h, 0.0, 7,
-                                  out[done:], stats, False, *ws, resume)  # fmt: skip
+                                  out[done:], stats, False, *ws, resume, vdp, 0,
+                                  np.array([0.0, -1.0, -1.0, 0.0]))  # fmt: skip
         done += nd
         resume = True
         if s != 1:

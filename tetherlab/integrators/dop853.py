@@ -26,6 +26,7 @@ MAX_STEPS = 1
 STEP_UNDERFLOW = 2
 RHS_FAILED = 3
 NON_FINITE = 4
+EVENT = 5  # an event function changed sign in the step; see dop853_core / radau5_core
 
 # stats[] slots (int64[8], accumulated across calls).
 ST_ACCEPTED = 0
@@ -229,8 +230,57 @@ def _dop_dense_eval(y, F, x, out):
 
 
 @njit(cache=True)
+def first_crossing(gold, gnew, ne):
+    """True if any event component changed side: "side" is g < 0 versus g >= 0, so a restart
+    exactly at a root (g = 0) counts as already on the non-negative side."""
+    for i in range(ne):
+        if (gold[i] < 0.0) != (gnew[i] < 0.0):
+            return True
+    return False
+
+
+@njit(cache=True)
+def apply_forced_side(gold, ne, ev):
+    """Right after a located event the state sits within the bracket width of the root and may
+    still evaluate on the old side; ev[2] >= 0 names that component and ev[3] its new-side value,
+    used once for the start of the restarted integration (then cleared), so the same crossing is
+    not found twice."""
+    fc = int(ev[2])
+    if fc >= 0 and fc < ne:
+        gold[fc] = ev[3]
+    ev[2] = -1.0
+
+
+def event_time_tolerance(t, h):
+    """Width of the bracket to which an event time is located (s): a few ulps of t, or of h."""
+    return 64.0 * EPS * max(abs(t), abs(h))
+
+
+event_time_tolerance = njit(cache=True)(event_time_tolerance)
+
+
+@njit(cache=True)
 def dop853_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats, fixed_step):
+    """The kernel ABI without events: :func:`dop853_core` with no event function."""
+    ev = np.array([0.0, -1.0, -1.0, 0.0])
+    return dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
+                       fixed_step, rhs, 0, ev)  # fmt: skip
+
+
+@njit(cache=True)
+def dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats, fixed_step,
+                event, ne, ev):  # fmt: skip
     """Integrate y' = rhs(t, y) from t to t_out[-1]; see the package docstring for the contract.
+
+    Events: ``event(t, y_ptr, g_ptr, p_ptr)`` (the rhs ABI) writes ``ne`` values g; after each
+    accepted step the kernel checks whether any changed side (g < 0 vs g >= 0).  If one did, the
+    step is *not* committed: the earliest crossing is bracketed by bisection on the step's dense
+    output to :func:`event_time_tolerance`, ``ev[0]`` gets the bracket's right end (where the
+    component is already on its new side), ``ev[1]`` the component, ``ev[2:4]`` the component and
+    its new-side value for the restart (:func:`apply_forced_side`), and the kernel returns EVENT
+    with (t, y) still the state at the step's start.  The caller then integrates exactly to
+    ev[0] (so a kink in the rhs at the event never lies inside a step) and restarts there.  Two
+    crossings of one component inside a single step cancel and are not seen.
 
     Returns (status, t_end, h_next, n_done).  ``y`` is overwritten with the state at t_end; rows
     0..n_done-1 of ``y_out`` hold the solution at t_out[0..n_done-1].  ``max_steps`` counts
@@ -257,6 +307,15 @@ def dop853_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stat
         return RHS_FAILED, t, h, n_done
     if not all_finite(K[0]):
         return NON_FINITE, t, h, n_done
+    gold = np.zeros(max(ne, 1))
+    gnew = np.zeros(max(ne, 1))
+    gtmp = np.zeros(max(ne, 1))
+    if ne > 0:
+        st = event(t, y.ctypes, gold.ctypes, p.ctypes)
+        if st != 0:
+            stats[ST_RHS_STATUS] = st
+            return RHS_FAILED, t, h, n_done
+        apply_forced_side(gold, ne, ev)
 
     hmax = h_max if h_max > 0.0 else np.inf
     if h <= 0.0:
@@ -284,6 +343,7 @@ def dop853_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stat
             last = True
 
         fail = 0
+        have_dense = False
         t_new = t_end if last else t + h
         st = _dop_stages(rhs, t, y, h, p, K, ys, stats)
         if st != 0:
@@ -317,6 +377,7 @@ def dop853_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stat
             else:
                 # Dense stages only on steps with an output time strictly inside (t, t_new).
                 if n_done < m and t_out[n_done] < t_new:
+                    have_dense = True
                     st = _dop_dense_stages(rhs, t, y, h, p, K, ys, stats)
                     if st == -1:
                         fail = NON_FINITE
@@ -352,6 +413,52 @@ def dop853_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stat
                 bad_kind = 0
                 h = hnew
                 continue
+
+        # ---- events (before anything is committed) ----
+        if ne > 0:
+            st = event(t_new, y_new.ctypes, gnew.ctypes, p.ctypes)
+            if st != 0:
+                stats[ST_RHS_STATUS] = st
+                return RHS_FAILED, t, h, n_done
+            if first_crossing(gold, gnew, ne):
+                if not have_dense:
+                    st = _dop_dense_stages(rhs, t, y, h, p, K, ys, stats)
+                    if st != 0:
+                        if st > 0:
+                            stats[ST_RHS_STATUS] = st
+                        return (RHS_FAILED if st > 0 else NON_FINITE), t, h, n_done
+                _dop_dense_coeffs(y, y_new, K, h, F)
+                tol = event_time_tolerance(t_new, h)
+                best = 1.0
+                comp = -1
+                for i in range(ne):
+                    if (gold[i] < 0.0) == (gnew[i] < 0.0):
+                        continue
+                    a = 0.0
+                    b = 1.0
+                    for _ in range(200):
+                        if (b - a) * h <= tol:
+                            break
+                        mid = 0.5 * (a + b)
+                        _dop_dense_eval(y, F, mid, ys)
+                        st = event(t + mid * h, ys.ctypes, gtmp.ctypes, p.ctypes)
+                        if st != 0:
+                            stats[ST_RHS_STATUS] = st
+                            return RHS_FAILED, t, h, n_done
+                        if (gtmp[i] < 0.0) == (gold[i] < 0.0):
+                            a = mid
+                        else:
+                            b = mid
+                    if comp < 0 or b < best:
+                        best = b
+                        comp = i
+                ev[0] = t_new if best >= 1.0 else t + best * h
+                ev[1] = comp
+                ev[2] = comp
+                ev[3] = 0.0 if gold[comp] < 0.0 else -1.0
+                return EVENT, t, h_unclipped, n_done
+            for i in range(ne):
+                gold[i] = gnew[i]
 
         # ---- accept ----
         if n_done < m and t_out[n_done] < t_new:

@@ -23,6 +23,7 @@ from numba.core.ccallback import CFunc
 from tetherlab._jit import RHS_SIG
 
 from .dop853 import (
+    EVENT,
     MAX_STEPS,
     NON_FINITE,
     OK,
@@ -35,7 +36,7 @@ from .dop853 import (
     ST_REJECTED,
     ST_RHS_STATUS,
     STEP_UNDERFLOW,
-    dop853_run,
+    dop853_core,
 )
 from .radau5 import radau5_core, radau5_workspace
 
@@ -68,6 +69,10 @@ class IntegrationResult:
     t_end: float
     y_end: np.ndarray
     stats: dict = field(default_factory=dict)
+    #: Located events, in time order: (t, component index, new side +1 (g >= 0) or -1 (g < 0)).
+    events: tuple = ()
+    #: Component of the terminal event that stopped the run (None if it ran to the end).
+    stopped_by: int | None = None
 
     @property
     def success(self) -> bool:
@@ -188,12 +193,17 @@ def _validate(method, rhs, t0, y0, t_out, p, rtol, atol, h0, h_max, max_steps, c
 # compilation
 # ----------------------------------------------------------------------------------------------
 def _call_kernel(method, rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
-                 fixed_step, ws, resume):  # fmt: skip
+                 fixed_step, ws, resume, event=None, ne=0, ev=None):  # fmt: skip
+    if event is None:
+        event, ne, ev = rhs, 0, _NO_EV  # same ABI; never called with ne = 0
     if method == "dop853":
-        return dop853_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
-                          fixed_step)  # fmt: skip
+        return dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
+                           fixed_step, event, ne, ev)  # fmt: skip
     return radau5_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
-                       fixed_step, *ws, resume)  # fmt: skip
+                       fixed_step, *ws, resume, event, ne, ev)  # fmt: skip
+
+
+_NO_EV = np.array([0.0, -1.0, -1.0, 0.0])  # t, component, forced component, its side
 
 
 def warm_up(method, rhs, n, p):
@@ -247,7 +257,8 @@ def status_message(status, t_end, h, rhs_status, n_newton_fail, max_steps):
 
 
 def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_steps=10**7,
-              chunk_seconds=0.5, progress=None, fixed_step=False, second_order=False):  # fmt: skip
+              chunk_seconds=0.5, progress=None, fixed_step=False, second_order=False,
+              event=None, n_events=0, terminal=()):  # fmt: skip
     """Integrate y' = rhs(t, y; p) from t0 and return the solution at the times ``t_out``.
 
     ``method``: one of :data:`METHODS`.  ``rhs``: a cfunc with :data:`tetherlab._jit.RHS_SIG`.
@@ -258,13 +269,19 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     ``fixed_step``: constant steps of ``h0`` without error control (native methods only; for
     convergence studies).  ``second_order``: the state is y = [q, v] with q' = v exactly (Cowell);
     RADAU5 then solves reduced Newton systems of half the size (same steps, less linear
-    algebra); other methods ignore it.  Never raises for a failure of the integration itself: that is
+    algebra); other methods ignore it.  ``event``: a cfunc with the rhs ABI writing ``n_events``
+    values g(t, y) (native methods only); every change of side of a component (g < 0 vs g >= 0)
+    is located on the dense output, the integration is taken exactly to it (no step straddles
+    it: the place for kinks such as a tether going slack) and restarted there; components whose
+    ``terminal[k]`` is true stop the run there, with the stop state as the last output row.
+    Never raises for a failure of the integration itself: that is
     reported in the result's ``status``/``message``, with every output computed before it.
     """
     t0, y, tt, rtol, atol_v, h0, h_max, max_steps, chunk_seconds, fixed_step = _validate(
         method, rhs, t0, y0, t_out, p, rtol, atol, h0, h_max, max_steps, chunk_seconds,
         progress, fixed_step,
     )  # fmt: skip
+    ne, terminal = _check_events(method, event, n_events, terminal)
     if method in SCIPY_METHODS:
         from .scipy_backend import integrate_scipy
 
@@ -280,7 +297,12 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         raise ValueError(f"second_order: expected a bool; got {second_order!r}")
     if second_order and n % 2:
         raise ValueError(f"second_order: expected an even state length (y = [q, v]); got {n}")
-    ws = radau5_workspace(n, n // 2 if second_order else 0) if method == "radau5" else ()
+    m1 = n // 2 if second_order else 0
+    ws = radau5_workspace(n, m1) if method == "radau5" else ()
+    ev = _NO_EV.copy()
+    events = []
+    stopped_by = None
+    t_stop_row = None
 
     t = t0
     h = h0
@@ -295,11 +317,41 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         c0 = time.perf_counter()
         status, t, h, nd = _call_kernel(method, rhs, t, y, tt[done:], p, rtol, atol_v, h, h_max,
                                         min(chunk, budget), y_out[done:], stats, fixed_step, ws,
-                                        resume)  # fmt: skip
-        dt = time.perf_counter() - c0
+                                        resume, event, ne, ev)  # fmt: skip
         n_chunks += 1
         resume = True
         done += int(nd)
+        if status == EVENT:
+            # Take the integration exactly to the event (the right end of its bracket, already
+            # on the new side), filling the outputs before it, then restart there afresh.
+            t_ev, comp, new_side = float(ev[0]), int(ev[1]), (1 if ev[3] >= 0.0 else -1)
+            pending = tt[done:]
+            k_in = int(np.searchsorted(pending, t_ev, side="right"))
+            sub_t = pending[:k_in]
+            if k_in == 0 or sub_t[-1] < t_ev:
+                sub_t = np.concatenate([sub_t, [t_ev]])
+            sub_out = np.empty((sub_t.size, n))
+            ws_sub = radau5_workspace(n, m1) if method == "radau5" else ()
+            status, t, h_sub, nd = _call_kernel(method, rhs, t, y, sub_t, p, rtol, atol_v, h,
+                                                h_max, max(budget, 1), sub_out, stats,
+                                                fixed_step, ws_sub, False)  # fmt: skip
+            n_fill = min(int(nd), k_in)
+            y_out[done : done + n_fill] = sub_out[:n_fill]
+            done += n_fill
+            if status != OK:
+                break
+            events.append((t, comp, new_side))
+            resume = False  # RADAU5's workspace holds the uncommitted step: start afresh
+            ws = radau5_workspace(n, m1) if method == "radau5" else ()
+            if h_sub > 0.0:
+                h = h_sub
+            if terminal[comp]:
+                stopped_by = comp
+                if done == 0 or tt[done - 1] < t:
+                    t_stop_row = (t, y.copy())
+                break
+            status = MAX_STEPS  # keep going (the budget check below still applies)
+        dt = time.perf_counter() - c0
         steps = int(stats[ST_ACCEPTED]) - steps_before
         budget -= steps
         if progress is not None:
@@ -329,7 +381,37 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     # Only rows that were computed are returned; a failed run's unused rows are dropped (copied
     # out so the unused tail of a large buffer is freed).
     y_res = y_out if done == m else y_out[:done].copy()
+    t_res = tt[:done].copy()
+    if stopped_by is not None:
+        msg = f"stopped by terminal event {stopped_by} at t={t!r}"
+        if t_stop_row is not None:  # the stop state itself is the last row
+            t_res = np.concatenate([t_res, [t_stop_row[0]]])
+            y_res = np.concatenate([y_res, t_stop_row[1][None, :]])
+    stats_d["n_events"] = len(events)
     return IntegrationResult(
-        t=tt[:done].copy(), y=y_res, status=status, message=msg, t_end=t, y_end=y.copy(),
-        stats=stats_d,
+        t=t_res, y=y_res, status=status, message=msg, t_end=t, y_end=y.copy(),
+        stats=stats_d, events=tuple(events), stopped_by=stopped_by,
     )  # fmt: skip
+
+
+def _check_events(method, event, n_events, terminal):
+    if event is None:
+        if n_events not in (0, None) or len(terminal):
+            raise ValueError(f"event: expected a cfunc when n_events={n_events!r} or terminal "
+                             f"is given; got None")  # fmt: skip
+        return 0, ()
+    if method not in NATIVE_METHODS:
+        raise ValueError(f"event: expected None with a scipy method (events are located by the "
+                         f"native methods {NATIVE_METHODS}); got an event function with "
+                         f"{method!r}")  # fmt: skip
+    if not isinstance(event, CFunc) or event._sig != RHS_SIG:
+        raise ValueError(f"event: expected a numba cfunc with signature {RHS_SIG}; got "
+                         f"{getattr(event, '_sig', None) or type(event).__name__}")  # fmt: skip
+    if isinstance(n_events, bool) or not isinstance(n_events, numbers.Integral) or n_events < 1:
+        raise ValueError(f"n_events: expected an integer >= 1 with an event function; got "
+                         f"{n_events!r}")  # fmt: skip
+    term = tuple(bool(x) for x in terminal)
+    if len(term) not in (0, n_events):
+        raise ValueError(f"terminal: expected {n_events} flags (one per event component) or "
+                         f"none; got {len(term)}")  # fmt: skip
+    return int(n_events), term or (False,) * int(n_events)

@@ -34,6 +34,7 @@ from tetherlab._jit import njit
 
 from .dop853 import (
     EPS,
+    EVENT,
     H_FLOOR,
     MAX_BAD_TRIALS,
     MAX_CONSECUTIVE_REJECTS,
@@ -51,7 +52,10 @@ from .dop853 import (
     STEP_UNDERFLOW,
     UNDERFLOW_FACTOR,
     all_finite,
+    apply_forced_side,
+    event_time_tolerance,
     fill_start_outputs,
+    first_crossing,
     hinit,
     scaled_sq,
 )
@@ -299,8 +303,15 @@ def radau5_core(
     fs,
     is_,
     resume,
+    event,
+    ne,
+    ev,
 ):
     """RADAU5 with an explicit workspace; ``resume`` continues from the state it holds.
+
+    Events (``event``, ``ne``, ``ev``) as in :func:`tetherlab.integrators.dop853.dop853_core`,
+    located on the step's collocation polynomial; an EVENT return leaves the workspace of the
+    uncommitted step, so the caller restarts fresh (``resume=False``) after it.
 
     Same contract as :func:`radau5_run` otherwise.  ``max_steps`` counts accepted steps and the
     call returns right after an accepted step, with everything the next step needs in the
@@ -330,6 +341,16 @@ def radau5_core(
     tmp = np.empty(n)
     scal = np.empty(n)
     w = np.empty(n, dtype=np.complex128)
+    gold = np.zeros(max(ne, 1))
+    gnew = np.zeros(max(ne, 1))
+    gtmp = np.zeros(max(ne, 1))
+    evc = np.zeros((4, n))
+    if ne > 0:
+        st = event(t, y.ctypes, gold.ctypes, p.ctypes)
+        if st != 0:
+            stats[ST_RHS_STATUS] = st
+            return RHS_FAILED, t, h, n_done
+        apply_forced_side(gold, ne, ev)
 
     if not (resume and is_[_I_STARTED] != 0):
         st = rhs(t, y.ctypes, f0.ctypes, p.ctypes)
@@ -652,6 +673,68 @@ def radau5_core(
                 need_jac = not caljac
                 continue
 
+            # ---------------------------------------------- events (nothing committed yet)
+            if ne > 0:
+                st = event(xph, tmp.ctypes, gnew.ctypes, p.ctypes)
+                if st != 0:
+                    stats[ST_RHS_STATUS] = st
+                    status = RHS_FAILED
+                    break
+                if first_crossing(gold, gnew, ne):
+                    # collocation polynomial of this step (as CONTR5 below), s in [-1, 0]
+                    for i in range(n):
+                        z1i = z1[i]
+                        z2i = z2[i]
+                        c1 = (z2i - z3[i]) / C2M1
+                        ak = (z1i - z2i) / C1MC2
+                        acont3 = (ak - z1i / C1) / C2
+                        c2 = (ak - c1) / C1M1
+                        evc[0, i] = tmp[i]
+                        evc[1, i] = c1
+                        evc[2, i] = c2
+                        evc[3, i] = c2 - acont3
+                    tol = event_time_tolerance(xph, h)
+                    best = 0.0
+                    comp = -1
+                    for k in range(ne):
+                        if (gold[k] < 0.0) == (gnew[k] < 0.0):
+                            continue
+                        a = -1.0
+                        b = 0.0
+                        for _ in range(200):
+                            if (b - a) * h <= tol:
+                                break
+                            sm = 0.5 * (a + b)
+                            for i in range(n):
+                                f2[i] = evc[0, i] + sm * (
+                                    evc[1, i] + (sm - C2M1) * (evc[2, i] + (sm - C1M1) * evc[3, i])
+                                )
+                            st = event(xph + sm * h, f2.ctypes, gtmp.ctypes, p.ctypes)
+                            if st != 0:
+                                break
+                            if (gtmp[k] < 0.0) == (gold[k] < 0.0):
+                                a = sm
+                            else:
+                                b = sm
+                        if st != 0:
+                            break
+                        if comp < 0 or b < best:
+                            best = b
+                            comp = k
+                    if st != 0:
+                        stats[ST_RHS_STATUS] = st
+                        status = RHS_FAILED
+                        break
+                    ev[0] = xph if best >= 0.0 else xph + best * h
+                    ev[1] = comp
+                    ev[2] = comp
+                    ev[3] = 0.0 if gold[comp] < 0.0 else -1.0
+                    h = h_unclipped
+                    status = EVENT
+                    break
+                for k in range(ne):
+                    gold[k] = gnew[k]
+
             # ---------------------------------------------- accept
             first = False
             naccpt += 1
@@ -761,7 +844,8 @@ def radau5_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stat
     f0 = np.zeros(n)
     fs = np.zeros(8)
     is_ = np.zeros(8, dtype=np.int64)
+    ev = np.array([0.0, -1.0, -1.0, 0.0])
     return radau5_core(
         rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats, fixed_step,
-        fjac, e1, e2, ip1, ip2, cont, f0, fs, is_, False,
+        fjac, e1, e2, ip1, ip2, cont, f0, fs, is_, False, rhs, 0, ev,
     )  # fmt: skip
