@@ -39,6 +39,7 @@ from .kernel.layout import (
     TT_NRODS,
     TT_ROD0,
     TT_SIZE,
+    TT_TENSION_ONLY,
     TT_TIP_M,
 )
 from .tether.chain import SQ3, accelerations
@@ -125,7 +126,8 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc):
                         p, t, ax + s * SQ3 * dx, ay + s * SQ3 * dy, az + s * SQ3 * dz
                     )
                 eps = p[scr + g * SR_SIZE + SR_EPS]
-                ve += 0.5 * p[rb + RT_EA] * p[rb + RT_LU] * eps * eps
+                if eps > 0.0 or p[tb + TT_TENSION_ONLY] == 0.0:  # a slack rod stores nothing
+                    ve += 0.5 * p[rb + RT_EA] * p[rb + RT_LU] * eps * eps
                 rods[row, g, 0] = eps
                 rods[row, g, 1] = p[scr + g * SR_SIZE + SR_FE]
                 ax += 2.0 * SQ3 * dx

@@ -17,7 +17,8 @@ from .errors import SceneError
 from .forces import effect as effect_spec
 from .formulations.cowell import cowell_rhs
 
-from .kernel.layout import FAIL_TEXT, H_FAIL_CODE, H_FAIL_ROD, H_FAIL_T, H_FAIL_VAL
+from .kernel.events import event_components, system_events
+from .kernel.layout import FAIL_TEXT, H_EV_STOP_R, H_FAIL_CODE, H_FAIL_ROD, H_FAIL_T, H_FAIL_VAL
 from .orbits.kepler import elements_to_cartesian
 from .result import Result
 from .system import (
@@ -53,6 +54,8 @@ class Prepared:
     ref_radius_m: float
     ref_period_s: float
     sides: list[float]
+    event_names: tuple = ()  # components of kernel/events.py::system_events for this scene
+    event_terminal: tuple = ()
 
 
 def _state_of(entity, mu: float):
@@ -116,6 +119,7 @@ def prepare(scene) -> Prepared:
             model=t.model,
             tip_mass_kg=scene.body(t.to_body).mass_kg,
             tip_name=t.to_body,
+            tension_only=t.tension_only,
         )
         for t in tethers
     ]
@@ -134,6 +138,23 @@ def prepare(scene) -> Prepared:
         root_name=root_name,
     )
     y0, r_ref, v_ref, sides = _initial_state(scene, model, root_name, tethers, mu)
+    stop_radius = 0.0
+    if scene.stop is not None and scene.stop.altitude_m is not None:
+        stop_radius = scene.central_body.radius_m + scene.stop.altitude_m
+        if not float(np.linalg.norm(y0[:3])) > stop_radius:
+            raise SceneError(
+                "stop.altitude", f"an altitude below the root body's initial altitude "
+                f"({float(np.linalg.norm(y0[:3])) - scene.central_body.radius_m:.6g} m)",
+                f"{scene.stop.altitude_m:.6g} m",
+            )
+    model.p[H_EV_STOP_R] = stop_radius
+    event_names, event_terminal = event_components(model, stop_radius)
+    if event_names and scene.integrator.method.startswith("scipy:"):
+        raise SceneError(
+            "integrator.method", "a native method (dop853 or radau5): this scene has events "
+            f"({', '.join(sorted({n.split('.')[0] for n in event_names}))}) that only they locate",
+            repr(scene.integrator.method),
+        )
 
     # reference orbit: radius and Keplerian period (for "N orbits" and the tolerance scales)
     rr = float(np.linalg.norm(r_ref))
@@ -169,7 +190,17 @@ def prepare(scene) -> Prepared:
         ref_radius_m=rr,
         ref_period_s=period,
         sides=sides,
+        event_names=tuple(event_names),
+        event_terminal=tuple(event_terminal),
     )
+
+
+def _event_args(prep) -> dict:
+    """The event function and its flags, only when the scene has events (scipy methods cannot
+    take them, so a scene with events names a native method; the driver says so otherwise)."""
+    if not prep.event_names:
+        return {}
+    return {"event": system_events, "n_events": len(prep.event_names), "terminal": prep.event_terminal}
 
 
 def _output_times(output, duration: float) -> np.ndarray:
@@ -385,10 +416,18 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
         max_steps=prep.max_steps,
         progress=bar.update,
         second_order=True,  # Cowell: y = [q, q'], so RADAU5 can halve its Newton systems
+        **_event_args(prep),
     )
     bar.close()
     stats = dict(res.stats)
     stats["total_wall_s"] = time.perf_counter() - t_wall
+    stats["events"] = [
+        {"t_s": float(te), "event": prep.event_names[k], "side": "taut" if side > 0 else "slack"}
+        if prep.event_names[k].startswith("slack.") else
+        {"t_s": float(te), "event": prep.event_names[k]}
+        for te, k, side in res.events
+    ]  # fmt: skip
+    stats["stopped_by"] = None if res.stopped_by is None else prep.event_names[res.stopped_by]
     message = res.message if res.status == 0 else failure_message(p, prep.model, res.status, res.t_end, res.message)
     d = diag.compute(prep.model, res.t, res.y)
     result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)

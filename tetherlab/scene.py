@@ -176,6 +176,9 @@ class Tether:
     model: str = "paper"
     quadrature: int = 2
     diameter_m: float | None = None
+    # A real tether cannot push: with tension_only the axial force is max(0, EA eps + D eps') for
+    # eps > 0 and zero otherwise; the kinks where it switches are located as events.
+    tension_only: bool = False
     # None when both ends are placed before the tether is laid (see Scene.layout_plan): it then
     # starts straight between them.
     initial: InitialShape | None = None
@@ -238,6 +241,13 @@ class LayoutStep:
 
 
 @dataclass(frozen=True)
+class Stop:
+    """Conditions that end a run before its duration (each located as a terminal event)."""
+
+    altitude_m: float | None = None  # the root body's altitude above the central body's radius
+
+
+@dataclass(frozen=True)
 class Scene:
     name: str
     duration_s: float | None  # exactly one of duration_s and duration_orbits is set
@@ -251,6 +261,7 @@ class Scene:
     output: OutputSpec
     description: str | None = None
     epoch: str | None = None  # ISO date, TDB
+    stop: Stop | None = None
     source: str = field(default="<dict>", compare=False)  # file path, or "<dict>"
 
     # -- construction ---------------------------------------------------------------------
@@ -534,6 +545,7 @@ _TOP_KEYS = (
     "orbit",
     "integrator",
     "output",
+    "stop",
 )
 _ORBITS_RE = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*orbits?\s*$")
 
@@ -563,6 +575,7 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     if duration_orbits is not None:
         _check_orbits_duration(top["duration"], orbit, bodies, mu)
     integrator = _parse_integrator(top.get("integrator", {}))
+    stop = _parse_stop(top["stop"], central) if "stop" in top else None
     scene = Scene(
         name=name,
         duration_s=duration_s,
@@ -576,6 +589,7 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
         output=OutputSpec(),  # filled below: checking output times needs the resolved duration
         description=description,
         epoch=epoch,
+        stop=stop,
         source=source,
     )
     output = _parse_output(_required(top, "output", "", "a table with one of step, count, times"), scene.duration_seconds())
@@ -765,6 +779,7 @@ _TETHER_KEYS = (
     "model",
     "quadrature",
     "initial",
+    "tension_only",
 )
 
 
@@ -836,7 +851,12 @@ def _parse_tethers(value: Any, bodies: tuple[Body, ...]) -> tuple[Tether, ...]:
         model = _choice(table.get("model", "paper"), f"{path}.model", TETHER_MODELS)
         quadrature = _integer(table.get("quadrature", 2), f"{path}.quadrature", *QUADRATURE_RANGE)
         initial = _parse_initial(table["initial"], f"{path}.initial", rods) if "initial" in table else None
-        tethers.append(Tether(name, start, end, rods, length, ea, mass, damping, model, quadrature, diameter, initial))
+        tension_only = table.get("tension_only", False)
+        if not isinstance(tension_only, bool):
+            raise SceneError(f"{path}.tension_only", "true or false", f"{shown(tension_only)} ({type(tension_only).__name__})")
+        tethers.append(
+            Tether(name, start, end, rods, length, ea, mass, damping, model, quadrature, diameter, tension_only=tension_only, initial=initial)
+        )
     return tuple(tethers)
 
 
@@ -1068,6 +1088,17 @@ def _check_orbits_duration(raw: Any, orbit: Orbit | None, bodies, mu: float) -> 
         raise SceneError("duration", "a time: the reference orbit is not closed (e >= 1), so it has no period", repr(raw)) from None
 
 
+def _parse_stop(value: Any, central: CentralBody) -> Stop:
+    path = "stop"
+    table = _table(value, path, ("altitude",))
+    if not table:
+        raise SceneError(path, "at least one stop condition (altitude)", "an empty table")
+    altitude = None
+    if "altitude" in table:
+        altitude = _quantity(table["altitude"], f"{path}.altitude", LENGTH, positive=True)
+    return Stop(altitude_m=altitude)
+
+
 def _parse_integrator(value: Any) -> IntegratorSpec:
     path = "integrator"
     table = _table(value, path, ("method", "rtol", "atol", "max_step", "max_steps"))
@@ -1190,6 +1221,8 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
             }
             if t.diameter_m is not None:
                 entry["diameter"] = format_si(t.diameter_m, LENGTH)
+            if t.tension_only:
+                entry["tension_only"] = True
             # A default shape is left out: it reads back the same, and a sweep that later places
             # both ends explicitly is not tripped by a shape nobody asked for.
             if t.initial is not None and t.initial != InitialShape():
@@ -1213,6 +1246,8 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
     if ig.max_steps is not None:
         integrator["max_steps"] = ig.max_steps
     out["integrator"] = integrator
+    if scene.stop is not None and scene.stop.altitude_m is not None:
+        out["stop"] = {"altitude": format_si(scene.stop.altitude_m, LENGTH)}
     op = scene.output
     if op.step_s is not None:
         out["output"] = {"step": format_si(op.step_s, TIME)}

@@ -35,6 +35,7 @@ class TetherSpec:
     model: str = "paper"  # "paper" | "energy"
     tip_mass_kg: float = 0.0  # 0: free end (no tip body)
     tip_name: str = ""
+    tension_only: bool = False  # no axial force in compression (slack tether)
 
 
 @dataclass
@@ -164,6 +165,7 @@ def build_model(
         p[base + L.TT_TIP_INV_M] = 1.0 / t.tip_mass_kg if t.tip_mass_kg > 0 else 0.0
         p[base + L.TT_TIP_M] = t.tip_mass_kg
         p[base + L.TT_MODEL] = {"paper": L.MODEL_PAPER, "energy": L.MODEL_ENERGY, "printed": L.MODEL_PRINTED}[t.model]
+        p[base + L.TT_TENSION_ONLY] = 1.0 if t.tension_only else 0.0
         rod_slices.append(slice(g, g + t.rods))
         for _ in range(t.rods):
             rb = offs["rod"] + g * L.RT_SIZE

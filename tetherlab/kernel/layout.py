@@ -29,6 +29,7 @@ H_FAIL_ROD = 16    # global index of the rod that failed (-1 if none)
 H_FAIL_T = 17      # time of the failure
 H_FAIL_VAL = 18    # a value describing the failure (e.g. the strain)
 H_MIN_STRAIN = 19  # strain below which a rod counts as collapsed (FAIL_ROD_COLLAPSE)
+H_EV_STOP_R = 20   # stop when the root body's radius falls below this (m; 0 = no such stop)
 H_SIZE = 24
 
 # -- formulation codes ---------------------------------------------------------------------------
@@ -57,6 +58,7 @@ TT_ROD0 = 1        # global index of its first rod
 TT_TIP_INV_M = 2   # 1/mf of the tip body
 TT_TIP_M = 3       # mf
 TT_MODEL = 4       # MODEL_*
+TT_TENSION_ONLY = 5  # 1: no axial force in compression (slack allowed), kinks located as events
 TT_SIZE = 8
 
 # -- rod table: RT_SIZE floats per rod ---------------------------------------------------------------

@@ -80,6 +80,7 @@ from ..kernel.layout import (
     SR_U,
     TT_MODEL,
     TT_NRODS,
+    TT_TENSION_ONLY,
     TT_ROD0,
     TT_SIZE,
     TT_TIP_INV_M,
@@ -147,6 +148,7 @@ def rod_forces(t, q, qd, p):
         tb = offt + k * TT_SIZE
         n = int(p[tb + TT_NRODS])
         g0 = int(p[tb + TT_ROD0])
+        tension_only = p[tb + TT_TENSION_ONLY] != 0.0
         energy = int(p[tb + TT_MODEL]) == MODEL_ENERGY
         printed = int(p[tb + TT_MODEL]) == MODEL_PRINTED
         # end A of the first rod sits on the root body (eq. 36)
@@ -179,6 +181,11 @@ def rod_forces(t, q, qd, p):
             uz = dz / dn
             epsd = 2.0 * SQ3 * (ux * ddx + uy * ddy + uz * ddz) / lu
             fe = ea * eps + damp * epsd  # eq. 1: T = EA eps + D eps'
+            if tension_only and (eps <= 0.0 or fe < 0.0):
+                # A slack tether neither pushes nor damps in compression, and damping cannot make
+                # a taut one push.  The switch is a kink in the rhs; kernel/events.py makes the
+                # integrators stop exactly on it (g = min(EA eps, T) changes sign there).
+                fe = 0.0
             # distributed forces: Gauss-Legendre on each half rod, xi in [-1, 0] and [0, 1];
             # node position r = r_A + (1 + xi) sqrt3 d, velocity likewise, tangent dr/dxi = sqrt3 d
             r1x = 0.0

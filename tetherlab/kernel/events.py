@@ -1,0 +1,90 @@
+"""Event functions of a tethered system: where the right-hand side has a kink, or a run stops.
+
+The integrators (tetherlab.integrators.driver.integrate with ``event=``) locate every change of
+side of these components on their dense output, take the step exactly to it and restart there,
+so no step ever straddles a kink.  Components, in this order (see :func:`event_components`):
+
+* ``stop.altitude`` (terminal): |r_root| - (R + h_stop), present when the scene has
+  ``[stop] altitude``; the run ends when the root body sinks below that altitude;
+* one per rod of every ``tension_only`` tether: g = min(EA eps, EA eps + D eps').  The axial
+  force max(0, EA eps + D eps') for eps > 0 (zero otherwise) switches exactly where g changes
+  sign, so a tether going slack or snapping taut is a located event, not luck.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import carray
+
+from .._jit import rhs_cfunc
+from .layout import (
+    H_EV_STOP_R,
+    H_LEN,
+    H_NSTATE,
+    H_NTETH,
+    H_OFF_ROD,
+    H_OFF_TETH,
+    RT_D,
+    RT_EA,
+    RT_LU,
+    RT_SIZE,
+    TT_NRODS,
+    TT_ROD0,
+    TT_SIZE,
+    TT_TENSION_ONLY,
+)
+
+SQ3 = math.sqrt(3.0)
+
+
+@rhs_cfunc
+def system_events(t, y_ptr, g_ptr, p_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    n = int(p[H_NSTATE])
+    y = carray(y_ptr, (n,))
+    h = n // 2
+    k = 0
+    r_stop = p[H_EV_STOP_R]
+    if r_stop > 0.0:
+        g_ptr[0] = math.sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]) - r_stop
+        k = 1
+    offt = int(p[H_OFF_TETH])
+    offr = int(p[H_OFF_ROD])
+    for tt in range(int(p[H_NTETH])):
+        tb = offt + tt * TT_SIZE
+        if p[tb + TT_TENSION_ONLY] == 0.0:
+            continue
+        g0 = int(p[tb + TT_ROD0])
+        for g in range(g0, g0 + int(p[tb + TT_NRODS])):
+            rb = offr + g * RT_SIZE
+            dx = y[3 + 3 * g]
+            dy = y[4 + 3 * g]
+            dz = y[5 + 3 * g]
+            dn = math.sqrt(dx * dx + dy * dy + dz * dz)
+            lu = p[rb + RT_LU]
+            ea = p[rb + RT_EA]
+            eps = 2.0 * SQ3 * dn / lu - 1.0
+            el = ea * eps
+            damp = p[rb + RT_D]
+            if damp != 0.0 and dn > 0.0:
+                epsd = 2.0 * SQ3 * (dx * y[h + 3 + 3 * g] + dy * y[h + 4 + 3 * g] + dz * y[h + 5 + 3 * g]) / (dn * lu)
+                el = min(el, el + damp * epsd)
+            g_ptr[k] = el
+            k += 1
+    return 0
+
+
+def event_components(model, stop_radius_m: float = 0.0) -> tuple[list[str], list[bool]]:
+    """Names and terminal flags of the components :func:`system_events` writes for ``model``
+    (whose p must have H_EV_STOP_R set to ``stop_radius_m``)."""
+    names, terminal = [], []
+    if stop_radius_m > 0.0:
+        names.append("stop.altitude")
+        terminal.append(True)
+    for t, sl in zip(model.tethers, model.rod_slices):
+        if getattr(t, "tension_only", False):
+            for i in range(sl.stop - sl.start):
+                names.append(f"slack.{t.name}.rod{i + 1}")
+                terminal.append(False)
+    return names, terminal
