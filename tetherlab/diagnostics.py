@@ -220,3 +220,26 @@ def zero_crossing_frequency(t: np.ndarray, x: np.ndarray) -> float:
         raise ValueError(f"only {len(idx)} zero crossings: run longer")
     tz = t[idx] - x[idx] * (t[idx + 1] - t[idx]) / (x[idx + 1] - x[idx])
     return math.pi / ((tz[-1] - tz[0]) / (len(tz) - 1))
+
+
+def internal_angular_momentum_scale(model, y) -> float:
+    """sum m |(r - r_cm) x (v - v_cm)| over the root, the tips and every TMED mass (m/2 at
+    r_G -/+ d): the size of the system's own angular momentum about its centre of mass.
+
+    The total angular momentum about the attracting centre is almost all orbital, so a relative
+    change of it cannot see an error in the tether's own rotation; this is the scale to measure
+    that against (references/gates.toml [angular_momentum_internal]).
+    """
+    from .system import center_of_mass, point_positions
+
+    pts = point_positions(model, y)
+    rc, vc = center_of_mass(model, y)
+    mr = model.rod_masses()
+    items = [(model.root_mass_kg, pts["r0"], pts["v0"])]
+    for k, t in enumerate(model.tethers):
+        if t.tip_mass_kg > 0:
+            items.append((t.tip_mass_kg, pts["joints"][k][-1], pts["jvel"][k][-1]))
+    for i in range(model.n_rods):
+        for s in (-1.0, 1.0):
+            items.append((0.5 * mr[i], pts["rG"][i] + s * pts["d"][i], pts["vG"][i] + s * pts["dd"][i]))
+    return float(sum(m * np.linalg.norm(np.cross(r - rc, v - vc)) for m, r, v in items))
