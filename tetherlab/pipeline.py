@@ -91,6 +91,13 @@ def _topology(scene):
         raise SceneError(
             "tethers", "tip bodies distinct from each other and from the root", f"tips {tips}, root {root!r}"
         )
+    for name in tips:
+        if scene.body(name).fixed:
+            # the kernel holds only the root at rest (inv_m0 = 0); a fixed tip needs another solve
+            raise SceneError(
+                f"bodies.{name}.fixed", "false: only the root body (the tethers' 'from' end) may be fixed",
+                f"true on the tip body {name!r}",
+            )
     unused = set(bodies) - {root} - set(tips)
     if unused:
         raise SceneError(
@@ -137,14 +144,17 @@ def prepare(scene) -> Prepared:
 
     # reference orbit: radius and Keplerian period (for "N orbits" and the tolerance scales)
     rr = float(np.linalg.norm(r_ref))
-    energy = 0.5 * float(v_ref @ v_ref) - mu / rr if mu > 0 else 0.0
-    if mu > 0 and energy < 0:
+    # Only a scene with the central body's gravity has an orbit; a surface-frame scene (e.g.
+    # uniform_gravity with a nail at the origin) has no period and a time unit of 1 s.
+    orbital = any(e.name == "central_gravity" for e in scene.effects) and rr > 0 and mu > 0
+    energy = 0.5 * float(v_ref @ v_ref) - mu / rr if orbital else 0.0
+    if orbital and energy < 0:
         a = -mu / (2 * energy)
         period = 2 * math.pi * math.sqrt(a**3 / mu)
     else:
         period = float("nan")
-    t_unit = math.sqrt(rr**3 / mu) if mu > 0 and rr > 0 else 1.0
-    ref_len = rr if rr > 0 else max((t.length_m for t in tethers), default=1.0)
+    t_unit = math.sqrt(rr**3 / mu) if orbital else 1.0
+    ref_len = rr if orbital else max(rr, max((t.length_m for t in tethers), default=1.0))
     atol = scene.integrator.atol * tolerance_scales(model, ref_len, t_unit)
 
     duration = scene.duration_s

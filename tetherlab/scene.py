@@ -75,6 +75,9 @@ INTEGRATOR_METHODS = (
     "scipy:RK45",
 )
 QUADRATURE_RANGE = (1, 8)  # Gauss-Legendre nodes per half-rod
+# Effects whose field is singular at the origin of the scene frame (the central body's centre):
+# with one of them named, no body may start there.
+SINGULAR_AT_ORIGIN = ("central_gravity",)
 
 Vector3 = tuple[float, float, float]
 
@@ -554,7 +557,10 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     central = _parse_central_body(top.get("central_body", {}))
     mu = central.mu_m3_s2
     effects = _parse_effects(_required(top, "effects", "", "a table of effects, e.g. central_gravity = {}"))
-    bodies = _parse_bodies(_required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu)
+    origin_singular = [e.name for e in effects if e.name in SINGULAR_AT_ORIGIN]
+    bodies = _parse_bodies(
+        _required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu, origin_singular
+    )
     tethers = _parse_tethers(top.get("tethers", {}), bodies)
     orbit = _parse_orbit(top["orbit"], bodies, mu) if "orbit" in top else None
     tethers = _check_layout(bodies, tethers, orbit, mu)
@@ -724,7 +730,7 @@ def _parse_state(table: Mapping[str, Any], path: str, *, fixed: bool = False):
     return None, None, None
 
 
-def _parse_bodies(value: Any, mu: float) -> tuple[Body, ...]:
+def _parse_bodies(value: Any, mu: float, origin_singular: list[str] = ()) -> tuple[Body, ...]:
     tables = _named_tables(value, "bodies", "bodies")
     if not tables:
         raise SceneError("bodies", "at least one body", "an empty table")
@@ -734,16 +740,27 @@ def _parse_bodies(value: Any, mu: float) -> tuple[Body, ...]:
         if name == CENTER_OF_MASS:
             raise SceneError(path, f"a body name other than {CENTER_OF_MASS!r} (it names the centre of mass in [orbit])", repr(name))
         table = _table(raw, path, ("mass", "position", "velocity", "elements", "fixed"))
-        mass = _quantity(_required(table, "mass", path, MASS.describe()), f"{path}.mass", MASS, positive=True)
         fixed = table.get("fixed", False)
         if not isinstance(fixed, bool):
             raise SceneError(f"{path}.fixed", "true or false", f"{shown(fixed)} ({type(fixed).__name__})")
+        # A fixed body (the catenary's "nail") never moves, so its mass plays no part: optional,
+        # stored as 0.0 when absent (and left out again by to_dict).
+        if fixed and "mass" not in table:
+            mass = 0.0
+        else:
+            mass = _quantity(_required(table, "mass", path, MASS.describe()), f"{path}.mass", MASS, positive=True)
         position, velocity, elements = _parse_state(table, path, fixed=fixed)
         body = Body(name, mass, fixed, position, velocity, elements)
-        if body.has_state:
+        # The origin is the centre of the central body only for the effects singular there; a
+        # surface-frame scene (uniform_gravity alone) may put its nail at the origin.
+        if body.has_state and origin_singular:
             r, _ = body.state(mu)
             if not np.linalg.norm(r) > 0.0:
-                raise SceneError(_join(path, "position"), "a position away from the centre of the central body", "the origin")
+                raise SceneError(
+                    _join(path, "position"),
+                    f"a position away from the centre of the central body (effect {origin_singular[0]!r} is singular there)",
+                    "the origin",
+                )
         bodies.append(body)
     return tuple(bodies)
 
@@ -1168,7 +1185,7 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
     }
     bodies = {}
     for b in scene.bodies:
-        entry: dict[str, Any] = {"mass": format_si(b.mass_kg, MASS)}
+        entry: dict[str, Any] = {} if (b.fixed and b.mass_kg == 0.0) else {"mass": format_si(b.mass_kg, MASS)}
         if b.fixed:
             entry["fixed"] = True
         entry.update(_state_dict(b.position_m, b.velocity_m_s, b.elements))
