@@ -53,6 +53,9 @@ class Prepared:
     ref_radius_m: float
     ref_period_s: float
     sides: list[float]
+    # shape 'equilibrium': the external force R_f on the end mass that holds the starting shape
+    # (tetherlab.statics); the run itself applies it only if the scene names it (applied_force)
+    holding_force_N: np.ndarray | None = None
 
 
 def _state_of(entity, mu: float):
@@ -141,12 +144,16 @@ def prepare(scene) -> Prepared:
         root_name=root_name,
     )
     y0, r_ref, v_ref, sides = _initial_state(scene, model, root_name, tethers, mu)
+    holding = None
+    if any(t.initial is not None and t.initial.shape == "equilibrium" for t in tethers):
+        y0, holding = _static_start(scene, root, tethers, specs, effects, central, nq, y0)
 
     # reference orbit: radius and Keplerian period (for "N orbits" and the tolerance scales)
     rr = float(np.linalg.norm(r_ref))
-    # Only a scene with the central body's gravity has an orbit; a surface-frame scene (e.g.
-    # uniform_gravity with a nail at the origin) has no period and a time unit of 1 s.
-    orbital = any(e.name == "central_gravity" for e in scene.effects) and rr > 0 and mu > 0
+    # A scene with an [orbit] or the central body's gravity has an orbit (and "N orbits"); a
+    # surface-frame scene (uniform_gravity, a nail possibly at the origin) has no period and a
+    # time unit of 1 s for the velocity tolerances.
+    orbital = (scene.orbit is not None or any(e.name == "central_gravity" for e in scene.effects)) and rr > 0 and mu > 0
     energy = 0.5 * float(v_ref @ v_ref) - mu / rr if orbital else 0.0
     if orbital and energy < 0:
         a = -mu / (2 * energy)
@@ -179,7 +186,41 @@ def prepare(scene) -> Prepared:
         ref_radius_m=rr,
         ref_period_s=period,
         sides=sides,
+        holding_force_N=holding,
     )
+
+
+def _static_start(scene, root, tethers, specs, effects, central, nq, y0):
+    """Initial state of a tether that starts in static equilibrium between its placed ends.
+
+    The root must be fixed and the end mass placed at rest; tetherlab.statics solves for the
+    rods and for the holding force R_f (docs/catenary.md).  Returns (y0, R_f).
+    """
+    from .statics import held_model, solve
+
+    t = tethers[0]
+    path = f"tethers.{t.name}.initial.shape"
+    if not root.fixed:
+        raise SceneError(
+            f"bodies.{root.name}.fixed", "true: shape 'equilibrium' holds the tether between a fixed root and its end mass",
+            "false",
+        )
+    if len(tethers) != 1:
+        raise SceneError(path, "'equilibrium' only in a scene with a single tether", f"{len(tethers)} tethers")
+    tip_r, tip_v = _state_of(scene.body(t.to_body), scene.central_body.mu_m3_s2)
+    if np.any(tip_v != 0.0):
+        raise SceneError(
+            f"bodies.{t.to_body}.velocity", "[0, 0, 0] m/s: a static equilibrium starts at rest", str(tip_v.tolist())
+        )
+    r0 = y0[:3]
+    orbital = any(e.name == "central_gravity" for e in scene.effects) and np.linalg.norm(r0) > 0
+    down = -r0 / np.linalg.norm(r0) if orbital else np.array([0.0, 0.0, -1.0])  # for the first guess
+    held = held_model(specs[0], effects, central, quadrature=nq, root_name=root.name)
+    try:
+        eq = solve(held, r0, tip_r, down=down)
+    except ValueError as exc:
+        raise SceneError(path, "a tether with a static equilibrium between its placed ends", str(exc)) from None
+    return eq.y, eq.holding_force_N
 
 
 def _output_times(output, duration: float) -> np.ndarray:

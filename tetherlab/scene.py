@@ -62,7 +62,8 @@ MAX_SANE_STRAIN = 0.05
 
 CENTER_OF_MASS = "center_of_mass"
 TETHER_MODELS = ("paper", "energy")
-SHAPES = ("straight", "rods")
+SHAPES = ("straight", "rods", "equilibrium")
+EQUILIBRIUM = "equilibrium"  # static shape between two placed ends (tetherlab.statics)
 SIDES = ("up", "down")
 MOTIONS = ("corotating", "translating", "equilibrium")
 INTEGRATOR_METHODS = (
@@ -873,6 +874,15 @@ def _angles(value: Any, key: str, shape: str, rods: int) -> float | tuple[float,
 def _parse_initial(value: Any, path: str, rods: int) -> InitialShape:
     table = _table(value, path, ("shape", "theta", "phi", "side", "strain"))
     shape = _choice(table.get("shape", "straight"), f"{path}.shape", SHAPES)
+    if shape == EQUILIBRIUM:
+        # the static solve decides every rod's direction and strain: nothing else to give
+        extra = [k for k in table if k != "shape"]
+        if extra:
+            raise SceneError(
+                f"{path}.{extra[0]}", "no other key with shape 'equilibrium' (the statics solve sets the shape)",
+                shown(table[extra[0]]),
+            )
+        return InitialShape(EQUILIBRIUM)
     if shape == "rods":
         theta = _angles(_required(table, "theta", path, f"a list of {rods} angles, one per rod"), f"{path}.theta", shape, rods)
         phi = _angles(table["phi"], f"{path}.phi", shape, rods) if "phi" in table else (0.0,) * rods
@@ -1028,8 +1038,15 @@ def _check_layout(bodies, tethers, orbit, mu) -> tuple[Tether, ...]:
     result = []
     for t in tethers:
         path = f"tethers.{t.name}"
+        if t.initial is not None and t.initial.shape == EQUILIBRIUM and t.name not in closing:
+            raise SceneError(
+                f"{path}.initial.shape",
+                "'straight' or 'rods' for a tether laid from one end ('equilibrium' needs both ends "
+                "placed: the root fixed and the end mass with a position)",
+                repr(EQUILIBRIUM),
+            )
         if t.name in closing:
-            if t.initial is not None:
+            if t.initial is not None and t.initial.shape != EQUILIBRIUM:
                 raise SceneError(
                     f"{path}.initial",
                     "no initial shape: both ends are placed before this tether is laid, so it starts "
@@ -1211,7 +1228,7 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
             # both ends explicitly is not tripped by a shape nobody asked for.
             if t.initial is not None and t.initial != InitialShape():
                 s = t.initial
-                entry["initial"] = {
+                entry["initial"] = {"shape": s.shape} if s.shape == EQUILIBRIUM else {
                     "shape": s.shape,
                     "theta": _angles_dict(s.theta_rad),
                     "phi": _angles_dict(s.phi_rad),
