@@ -56,6 +56,9 @@ class Prepared:
     sides: list[float]
     event_names: tuple = ()  # components of kernel/events.py::system_events for this scene
     event_terminal: tuple = ()
+    # shape 'equilibrium': the external force R_f on the end mass that holds the starting shape
+    # (tetherlab.statics); the run itself applies it only if the scene names it (applied_force)
+    holding_force_N: np.ndarray | None = None
 
 
 def _state_of(entity, mu: float):
@@ -94,6 +97,13 @@ def _topology(scene):
         raise SceneError(
             "tethers", "tip bodies distinct from each other and from the root", f"tips {tips}, root {root!r}"
         )
+    for name in tips:
+        if scene.body(name).fixed:
+            # the kernel holds only the root at rest (inv_m0 = 0); a fixed tip needs another solve
+            raise SceneError(
+                f"bodies.{name}.fixed", "false: only the root body (the tethers' 'from' end) may be fixed",
+                f"true on the tip body {name!r}",
+            )
     unused = set(bodies) - {root} - set(tips)
     if unused:
         raise SceneError(
@@ -138,6 +148,9 @@ def prepare(scene) -> Prepared:
         root_name=root_name,
     )
     y0, r_ref, v_ref, sides = _initial_state(scene, model, root_name, tethers, mu)
+    holding = None
+    if any(t.initial is not None and t.initial.shape == "equilibrium" for t in tethers):
+        y0, holding = _static_start(scene, root, tethers, specs, effects, central, nq, y0)
     stop_radius = 0.0
     if scene.stop is not None and scene.stop.altitude_m is not None:
         stop_radius = scene.central_body.radius_m + scene.stop.altitude_m
@@ -158,14 +171,18 @@ def prepare(scene) -> Prepared:
 
     # reference orbit: radius and Keplerian period (for "N orbits" and the tolerance scales)
     rr = float(np.linalg.norm(r_ref))
-    energy = 0.5 * float(v_ref @ v_ref) - mu / rr if mu > 0 else 0.0
-    if mu > 0 and energy < 0:
+    # A scene with an [orbit] or the central body's gravity has an orbit (and "N orbits"); a
+    # surface-frame scene (uniform_gravity, a nail possibly at the origin) has no period and a
+    # time unit of 1 s for the velocity tolerances.
+    orbital = (scene.orbit is not None or any(e.name == "central_gravity" for e in scene.effects)) and rr > 0 and mu > 0
+    energy = 0.5 * float(v_ref @ v_ref) - mu / rr if orbital else 0.0
+    if orbital and energy < 0:
         a = -mu / (2 * energy)
         period = 2 * math.pi * math.sqrt(a**3 / mu)
     else:
         period = float("nan")
-    t_unit = math.sqrt(rr**3 / mu) if mu > 0 and rr > 0 else 1.0
-    ref_len = rr if rr > 0 else max((t.length_m for t in tethers), default=1.0)
+    t_unit = math.sqrt(rr**3 / mu) if orbital else 1.0
+    ref_len = rr if orbital else max(rr, max((t.length_m for t in tethers), default=1.0))
     atol = scene.integrator.atol * tolerance_scales(model, ref_len, t_unit)
 
     duration = scene.duration_s
@@ -192,6 +209,7 @@ def prepare(scene) -> Prepared:
         sides=sides,
         event_names=tuple(event_names),
         event_terminal=tuple(event_terminal),
+        holding_force_N=holding,
     )
 
 
@@ -201,6 +219,39 @@ def _event_args(prep) -> dict:
     if not prep.event_names:
         return {}
     return {"event": system_events, "n_events": len(prep.event_names), "terminal": prep.event_terminal}
+
+
+def _static_start(scene, root, tethers, specs, effects, central, nq, y0):
+    """Initial state of a tether that starts in static equilibrium between its placed ends.
+
+    The root must be fixed and the end mass placed at rest; tetherlab.statics solves for the
+    rods and for the holding force R_f (docs/catenary.md).  Returns (y0, R_f).
+    """
+    from .statics import held_model, solve
+
+    t = tethers[0]
+    path = f"tethers.{t.name}.initial.shape"
+    if not root.fixed:
+        raise SceneError(
+            f"bodies.{root.name}.fixed", "true: shape 'equilibrium' holds the tether between a fixed root and its end mass",
+            "false",
+        )
+    if len(tethers) != 1:
+        raise SceneError(path, "'equilibrium' only in a scene with a single tether", f"{len(tethers)} tethers")
+    tip_r, tip_v = _state_of(scene.body(t.to_body), scene.central_body.mu_m3_s2)
+    if np.any(tip_v != 0.0):
+        raise SceneError(
+            f"bodies.{t.to_body}.velocity", "[0, 0, 0] m/s: a static equilibrium starts at rest", str(tip_v.tolist())
+        )
+    r0 = y0[:3]
+    orbital = any(e.name == "central_gravity" for e in scene.effects) and np.linalg.norm(r0) > 0
+    down = -r0 / np.linalg.norm(r0) if orbital else np.array([0.0, 0.0, -1.0])  # for the first guess
+    held = held_model(specs[0], effects, central, quadrature=nq, root_name=root.name)
+    try:
+        eq = solve(held, r0, tip_r, down=down)
+    except ValueError as exc:
+        raise SceneError(path, "a tether with a static equilibrium between its placed ends", str(exc)) from None
+    return eq.y, eq.holding_force_N
 
 
 def _output_times(output, duration: float) -> np.ndarray:

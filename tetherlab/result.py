@@ -111,10 +111,19 @@ class Result:
             dcols[f"angmom_{ax}_kg_m2_s"] = g[:, diag.G_HX + j]
         if nrows:
             E0 = g[0, diag.G_E]
-            scaleE = max(abs(g[0, diag.G_KE]), abs(g[0, diag.G_VG]), abs(g[0, diag.G_VE]), 1e-300)
-            dcols["energy_error_rel"] = (g[:, diag.G_E] - E0) / scaleE
+            # A system that starts at rest in a field-free frame has no energy or angular
+            # momentum scale at t = 0: its relative errors are NaN (undefined), never 1e300.
+            scaleE = max(abs(g[0, diag.G_KE]), abs(g[0, diag.G_VG]), abs(g[0, diag.G_VE]))
+            dE = g[:, diag.G_E] - E0
+            dcols["energy_error_rel"] = dE / scaleE if scaleE > 0 else np.full(nrows, np.nan)
             H = g[:, diag.G_HX : diag.G_HZ + 1]
-            dcols["angmom_error_rel"] = np.linalg.norm(H - H[0], axis=1) / max(np.linalg.norm(H[0]), 1e-300)
+            dH = np.linalg.norm(H - H[0], axis=1)
+            h0 = float(np.linalg.norm(H[0]))
+            dcols["angmom_error_rel"] = dH / h0 if h0 > 0 else np.full(nrows, np.nan)
+            # |H| is mostly orbital in orbit; the system's own angular momentum about its centre
+            # of mass is the scale that sees an error in the tether's rotation (gates.toml)
+            h_int = diag.internal_angular_momentum_scale(model, Y[0])
+            dcols["angmom_error_internal"] = dH / h_int if h_int > 0 else np.full(nrows, np.nan)
             # libration angles of each tether (root -> tip line) in the centre of mass's orbital frame
             rc, vc = _center_of_mass_rows(model, Y)
             for k, tet in enumerate(model.tethers):

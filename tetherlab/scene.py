@@ -62,7 +62,8 @@ MAX_SANE_STRAIN = 0.05
 
 CENTER_OF_MASS = "center_of_mass"
 TETHER_MODELS = ("paper", "energy")
-SHAPES = ("straight", "rods")
+SHAPES = ("straight", "rods", "equilibrium")
+EQUILIBRIUM = "equilibrium"  # static shape between two placed ends (tetherlab.statics)
 SIDES = ("up", "down")
 MOTIONS = ("corotating", "translating", "equilibrium")
 INTEGRATOR_METHODS = (
@@ -75,6 +76,9 @@ INTEGRATOR_METHODS = (
     "scipy:RK45",
 )
 QUADRATURE_RANGE = (1, 8)  # Gauss-Legendre nodes per half-rod
+# Effects whose field is singular at the origin of the scene frame (the central body's centre):
+# with one of them named, no body may start there.
+SINGULAR_AT_ORIGIN = ("central_gravity",)
 
 Vector3 = tuple[float, float, float]
 
@@ -566,7 +570,10 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     central = _parse_central_body(top.get("central_body", {}))
     mu = central.mu_m3_s2
     effects = _parse_effects(_required(top, "effects", "", "a table of effects, e.g. central_gravity = {}"))
-    bodies = _parse_bodies(_required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu)
+    origin_singular = [e.name for e in effects if e.name in SINGULAR_AT_ORIGIN]
+    bodies = _parse_bodies(
+        _required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu, origin_singular
+    )
     tethers = _parse_tethers(top.get("tethers", {}), bodies)
     orbit = _parse_orbit(top["orbit"], bodies, mu) if "orbit" in top else None
     tethers = _check_layout(bodies, tethers, orbit, mu)
@@ -738,7 +745,7 @@ def _parse_state(table: Mapping[str, Any], path: str, *, fixed: bool = False):
     return None, None, None
 
 
-def _parse_bodies(value: Any, mu: float) -> tuple[Body, ...]:
+def _parse_bodies(value: Any, mu: float, origin_singular: list[str] = ()) -> tuple[Body, ...]:
     tables = _named_tables(value, "bodies", "bodies")
     if not tables:
         raise SceneError("bodies", "at least one body", "an empty table")
@@ -748,16 +755,27 @@ def _parse_bodies(value: Any, mu: float) -> tuple[Body, ...]:
         if name == CENTER_OF_MASS:
             raise SceneError(path, f"a body name other than {CENTER_OF_MASS!r} (it names the centre of mass in [orbit])", repr(name))
         table = _table(raw, path, ("mass", "position", "velocity", "elements", "fixed"))
-        mass = _quantity(_required(table, "mass", path, MASS.describe()), f"{path}.mass", MASS, positive=True)
         fixed = table.get("fixed", False)
         if not isinstance(fixed, bool):
             raise SceneError(f"{path}.fixed", "true or false", f"{shown(fixed)} ({type(fixed).__name__})")
+        # A fixed body (the catenary's "nail") never moves, so its mass plays no part: optional,
+        # stored as 0.0 when absent (and left out again by to_dict).
+        if fixed and "mass" not in table:
+            mass = 0.0
+        else:
+            mass = _quantity(_required(table, "mass", path, MASS.describe()), f"{path}.mass", MASS, positive=True)
         position, velocity, elements = _parse_state(table, path, fixed=fixed)
         body = Body(name, mass, fixed, position, velocity, elements)
-        if body.has_state:
+        # The origin is the centre of the central body only for the effects singular there; a
+        # surface-frame scene (uniform_gravity alone) may put its nail at the origin.
+        if body.has_state and origin_singular:
             r, _ = body.state(mu)
             if not np.linalg.norm(r) > 0.0:
-                raise SceneError(_join(path, "position"), "a position away from the centre of the central body", "the origin")
+                raise SceneError(
+                    _join(path, "position"),
+                    f"a position away from the centre of the central body (effect {origin_singular[0]!r} is singular there)",
+                    "the origin",
+                )
         bodies.append(body)
     return tuple(bodies)
 
@@ -876,6 +894,15 @@ def _angles(value: Any, key: str, shape: str, rods: int) -> float | tuple[float,
 def _parse_initial(value: Any, path: str, rods: int) -> InitialShape:
     table = _table(value, path, ("shape", "theta", "phi", "side", "strain"))
     shape = _choice(table.get("shape", "straight"), f"{path}.shape", SHAPES)
+    if shape == EQUILIBRIUM:
+        # the static solve decides every rod's direction and strain: nothing else to give
+        extra = [k for k in table if k != "shape"]
+        if extra:
+            raise SceneError(
+                f"{path}.{extra[0]}", "no other key with shape 'equilibrium' (the statics solve sets the shape)",
+                shown(table[extra[0]]),
+            )
+        return InitialShape(EQUILIBRIUM)
     if shape == "rods":
         theta = _angles(_required(table, "theta", path, f"a list of {rods} angles, one per rod"), f"{path}.theta", shape, rods)
         phi = _angles(table["phi"], f"{path}.phi", shape, rods) if "phi" in table else (0.0,) * rods
@@ -1031,8 +1058,15 @@ def _check_layout(bodies, tethers, orbit, mu) -> tuple[Tether, ...]:
     result = []
     for t in tethers:
         path = f"tethers.{t.name}"
+        if t.initial is not None and t.initial.shape == EQUILIBRIUM and t.name not in closing:
+            raise SceneError(
+                f"{path}.initial.shape",
+                "'straight' or 'rods' for a tether laid from one end ('equilibrium' needs both ends "
+                "placed: the root fixed and the end mass with a position)",
+                repr(EQUILIBRIUM),
+            )
         if t.name in closing:
-            if t.initial is not None:
+            if t.initial is not None and t.initial.shape != EQUILIBRIUM:
                 raise SceneError(
                     f"{path}.initial",
                     "no initial shape: both ends are placed before this tether is laid, so it starts "
@@ -1199,7 +1233,7 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
     }
     bodies = {}
     for b in scene.bodies:
-        entry: dict[str, Any] = {"mass": format_si(b.mass_kg, MASS)}
+        entry: dict[str, Any] = {} if (b.fixed and b.mass_kg == 0.0) else {"mass": format_si(b.mass_kg, MASS)}
         if b.fixed:
             entry["fixed"] = True
         entry.update(_state_dict(b.position_m, b.velocity_m_s, b.elements))
@@ -1227,7 +1261,7 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
             # both ends explicitly is not tripped by a shape nobody asked for.
             if t.initial is not None and t.initial != InitialShape():
                 s = t.initial
-                entry["initial"] = {
+                entry["initial"] = {"shape": s.shape} if s.shape == EQUILIBRIUM else {
                     "shape": s.shape,
                     "theta": _angles_dict(s.theta_rad),
                     "phi": _angles_dict(s.phi_rad),

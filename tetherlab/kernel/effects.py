@@ -20,7 +20,7 @@ Adding an effect = one module in tetherlab/forces/ + one branch in each function
 from __future__ import annotations
 
 from .._jit import njit
-from ..forces import central_gravity
+from ..forces import applied_force, central_gravity, uniform_gravity
 from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_CNT, H_OFF_EFF
 
 
@@ -41,6 +41,13 @@ def body_force(p, t, body, x, y, z, vx, vy, vz, mass):
             fx += mass * ax
             fy += mass * ay
             fz += mass * az
+        elif code == uniform_gravity.CODE:
+            fz += mass * uniform_gravity.accel(p[par], x, y, z)[2]
+        elif code == applied_force.CODE:
+            if body == int(p[par]):
+                fx += p[par + 1]
+                fy += p[par + 2]
+                fz += p[par + 3]
     return fx, fy, fz
 
 
@@ -61,6 +68,8 @@ def rod_force_density(p, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
             fx += mass_per_xi * ax
             fy += mass_per_xi * ay
             fz += mass_per_xi * az
+        elif code == uniform_gravity.CODE:
+            fz += mass_per_xi * uniform_gravity.accel(p[par], x, y, z)[2]
     return fx, fy, fz
 
 
@@ -75,4 +84,6 @@ def potential_per_mass(p, t, x, y, z):
         par = int(p[off + e * ET_SIZE + ET_OFF_PAR])
         if code == central_gravity.CODE:
             u += central_gravity.potential(p[par], x, y, z)
+        elif code == uniform_gravity.CODE:
+            u += uniform_gravity.potential(p[par], x, y, z)
     return u
