@@ -13,6 +13,7 @@ import datetime as _dt
 import html
 import json
 import math
+import re
 import subprocess
 import sys
 import time
@@ -175,6 +176,61 @@ def section_43_figures(out: Path, rows_out):
     return figs
 
 
+# -- studies: scripts in studies/ that write OUTDIR/<name>.md (+ CSV, PNG) ------------------------
+def _load_study(name: str):
+    import importlib.util
+
+    path = ROOT / "studies" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"tetherlab_study_{name}", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _catenary_gates(outdir: Path) -> dict:
+    import pandas as pd
+
+    mod = _load_study("catenary")
+    df = pd.read_csv(outdir / "catenary.csv")
+    paper = df[df.model == "paper"]
+    n64 = paper[paper.n == paper.n.max()].iloc[0]
+    order = mod.observed_order(paper["n"], paper["shape_joints_m"])
+    return {
+        "catenary_shape_n64": float(n64["shape_joints_m"]),
+        "catenary_tension_n64": float(max(n64["tension_A_N"], n64["tension_B_N"])),
+        "catenary_order_deviation": abs(order - 2.0),
+    }
+
+
+#: (title, study script in studies/, markdown it writes, function reading its gate values)
+STUDIES = [
+    ("Catenary against Irvine's elastic catenary (paper section 4.2)", "catenary", "catenary.md", _catenary_gates),
+]
+
+
+def run_studies(out: Path, only=None):
+    """Run every study into out/<name>/; a study that fails is reported (its gates then fail),
+    the others still run."""
+    sections, values, failures = [], {}, []
+    for title, name, md_name, gates_fn in STUDIES:
+        if only and name not in only:
+            continue
+        sdir = out / name
+        sdir.mkdir(parents=True, exist_ok=True)
+        t0 = time.perf_counter()
+        try:
+            _load_study(name).main([str(sdir)])
+            values.update(gates_fn(sdir) if gates_fn else {})
+            md = (sdir / md_name).read_text()
+            # images and links in the study's Markdown are relative to its own directory
+            md = re.sub(r"\]\((?!https?:)([^)]+)\)", lambda m: f"]({name}/{m.group(1)})", md)
+            sections.append((title, md, time.perf_counter() - t0))
+        except Exception as exc:  # report and go on: one broken study must not hide the rest
+            failures.append(name)
+            sections.append((title, f"**Study failed:** `{type(exc).__name__}: {exc}`", time.perf_counter() - t0))
+    return sections, values, failures
+
+
 def footer() -> str:
     from .result import library_versions
 
@@ -211,6 +267,7 @@ def _fmt(v):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--out", default=str(ROOT / "reports"))
+    ap.add_argument("--only", nargs="*", help="run only these studies (names of studies/*.py)")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -231,6 +288,8 @@ def main(argv=None) -> int:
     fig_rows = []
     figs = section_43_figures(out, fig_rows)
     sections["Section 4.3 scenes as shipped"] = fig_rows
+    study_sections, study_values, study_failures = run_studies(out, args.only)
+    values.update(study_values)
 
     gate_rows = []
     failed = []
@@ -242,6 +301,7 @@ def main(argv=None) -> int:
         gate_rows.append({"gate": gid, "value": val if val is not None else "not measured",
                           "threshold": g["threshold"], "unit": g["unit"], "result": "PASS" if ok else "FAIL",
                           "source": g["source"]})
+    failed += [f"study {name} (crashed)" for name in study_failures]
     with open(out / "gates.csv", "w") as f:
         f.write("gate,value,threshold,unit,result\n")
         for r in gate_rows:
@@ -252,6 +312,8 @@ def main(argv=None) -> int:
           "## Gates", "", _table_md(gate_rows), ""]
     for title, rows in sections.items():
         md += [f"## {title}", "", _table_md(rows), ""]
+    for title, text, secs in study_sections:
+        md += [f"## {title}", "", f"*(study run in {secs:.0f} s)*", "", text.replace("\n## ", "\n### "), ""]
     md += ["## Figures", ""]
     for name, files in figs:
         md += [f"### {name}", ""] + [f"![{name}]({f.as_posix()})" for f in files] + [""]
@@ -260,6 +322,10 @@ def main(argv=None) -> int:
     (out / "index.md").write_text("\n".join(md))
     body = "".join(
         f"<h2>{html.escape(t)}</h2>{_table_html(r)}" for t, r in [("Gates", gate_rows)] + list(sections.items())
+    )
+    body += "".join(
+        f"<h2>{html.escape(t)}</h2><p><i>(study run in {secs:.0f} s)</i></p>{_md_to_html(text)}"
+        for t, text, secs in study_sections
     )
     body += "<h2>Figures</h2>" + "".join(
         f"<h3>{html.escape(n)}</h3>" + "".join(f'<img src="{f.as_posix()}" width="560">' for f in fs) for n, fs in figs
@@ -274,6 +340,36 @@ def main(argv=None) -> int:
         print(f"FAILED gates: {', '.join(failed)}", file=sys.stderr)
         return 1
     return 0
+
+
+def _md_to_html(text: str) -> str:
+    """A small Markdown subset (headings, tables, images, paragraphs) for the HTML report."""
+    out, table = [], []
+
+    def flush():
+        if table:
+            rows = [r for r in table if not re.fullmatch(r"\|?[-:| ]+\|?", r)]
+            cells = [[c.strip() for c in r.strip().strip("|").split("|")] for r in rows]
+            head = "".join(f"<th>{html.escape(c)}</th>" for c in cells[0])
+            body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in r) + "</tr>" for r in cells[1:])
+            out.append(f"<table border=1 cellpadding=3><tr>{head}</tr>{body}</table>")
+            table.clear()
+
+    for line in text.splitlines():
+        if line.startswith("|"):
+            table.append(line)
+            continue
+        flush()
+        m = re.fullmatch(r"!\[([^]]*)\]\(([^)]+)\)", line.strip())
+        if m:
+            out.append(f'<img src="{html.escape(m.group(2))}" alt="{html.escape(m.group(1))}" width="720">')
+        elif line.startswith("#"):
+            level = min(len(line) - len(line.lstrip("#")) + 1, 6)
+            out.append(f"<h{level}>{html.escape(line.lstrip('#').strip())}</h{level}>")
+        elif line.strip():
+            out.append(f"<p>{html.escape(line)}</p>")
+    flush()
+    return "".join(out)
 
 
 def _table_html(rows):
