@@ -132,6 +132,8 @@ def prepare(scene) -> Prepared:
         quadrature=nq,
         root_fixed=bool(getattr(root, "fixed", False)),
         root_name=root_name,
+        epoch=scene.epoch,
+        duration_s=_duration_hint(scene),
     )
     y0, r_ref, v_ref, sides = _initial_state(scene, model, root_name, tethers, mu)
 
@@ -170,6 +172,14 @@ def prepare(scene) -> Prepared:
         ref_period_s=period,
         sides=sides,
     )
+
+
+def _duration_hint(scene) -> float | None:
+    """The run length for effects fitted over the run (before the initial state is laid out)."""
+    try:
+        return scene.duration_seconds()
+    except ValueError:  # "N orbits" without an orbit: refused below with a SceneError
+        return None
 
 
 def _output_times(output, duration: float) -> np.ndarray:
