@@ -110,13 +110,22 @@ def accel_at(mu, sx, sy, sz, x, y, z):
 
 @njit(cache=True)
 def potential_at(mu, sx, sy, sz, x, y, z):
-    """Tidal potential per unit mass (J/kg), zero at the central body; accel_at = -grad_r."""
+    """Tidal potential per unit mass (J/kg), zero at the central body; accel_at = -grad_r.
+
+    -mu [1/d - 1/S - q/S^3] (d = |s - r|, S = |s|, q = s.r) is evaluated as one fraction whose
+    numerator has no first-order cancellation (docs/effects-gravity.md, sec. 3): the naive form
+    loses the digits of S/|r| (8 of them for the Sun at LEO).
+    """
     dx = sx - x
     dy = sy - y
     dz = sz - z
-    s2 = sx * sx + sy * sy + sz * sz
-    s = math.sqrt(s2)
-    return -mu * (1.0 / math.sqrt(dx * dx + dy * dy + dz * dz) - 1.0 / s - (sx * x + sy * y + sz * z) / (s2 * s))
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    S2 = sx * sx + sy * sy + sz * sz
+    S = math.sqrt(S2)
+    q = sx * x + sy * y + sz * z
+    r2 = x * x + y * y + z * z
+    num = q * S * (2.0 * q - r2) / (S + d) - r2 * S2 + 2.0 * q * q - q * r2
+    return -mu * num / (S2 * S * d * (S + d))
 
 
 @njit(cache=True)
