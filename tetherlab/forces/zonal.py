@@ -6,7 +6,7 @@ names both.  Derivation of every formula below: ``docs/effects-gravity.md``.
 
 Frame assumption: the body's rotation (symmetry) axis is the +z axis of the inertial frame the
 scene is written in (for the Earth: the GCRS z axis, i.e. the celestial pole, neglecting
-precession and nutation of the true pole, < 0.4 deg over a century from J2000).
+precession and nutation of the true pole, about 20 arcsec a year, 0.56 deg a century).
 
 Two effects, so a scene pays only for what it names:
 
