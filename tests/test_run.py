@@ -133,6 +133,18 @@ def test_only_named_effects_are_evaluated():
     assert all(v == 0 for k, v in counts.items() if k != "central_gravity")
 
 
+@pytest.mark.parametrize("name", ["j2", "zonal", "moon_de421", "sun_de421"])
+def test_a_named_gravity_effect_is_evaluated_and_no_other(name):
+    # The gravity family (forces/zonal.py, forces/third_body.py) on the tethered scene: the named
+    # effect runs (on bodies and rods), every effect not named keeps a zero counter.
+    res = simulate(_short(**{f"effects.{name}": {}, "epoch": "2026-01-01T00:00:00"}), progress=False)
+    counts = res.meta["effect_evaluations"]
+    assert counts[name] > 0
+    # evaluated wherever central gravity is (root, tip and every rod quadrature node): rods too
+    assert counts[name] == counts["central_gravity"]
+    assert all(v == 0 for k, v in counts.items() if k not in (name, "central_gravity"))
+
+
 @pytest.mark.parametrize("method", ["radau5", "scipy:DOP853"])
 def test_integrators_agree_on_the_benchmark_scene(method):
     # Same scene, same compiled right-hand side, rtol = atol = 1e-10 (in scale units): the tip

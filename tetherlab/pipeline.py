@@ -146,6 +146,8 @@ def prepare(scene) -> Prepared:
         quadrature=nq,
         root_fixed=bool(getattr(root, "fixed", False)),
         root_name=root_name,
+        epoch=scene.epoch,
+        duration_s=_duration_hint(scene),
     )
     y0, r_ref, v_ref, sides = _initial_state(scene, model, root_name, tethers, mu)
     holding = None
@@ -252,6 +254,12 @@ def _static_start(scene, root, tethers, specs, effects, central, nq, y0):
     except ValueError as exc:
         raise SceneError(path, "a tether with a static equilibrium between its placed ends", str(exc)) from None
     return eq.y, eq.holding_force_N
+def _duration_hint(scene) -> float | None:
+    """The run length for effects fitted over the run (before the initial state is laid out)."""
+    try:
+        return scene.duration_seconds()
+    except ValueError:  # "N orbits" without an orbit: refused below with a SceneError
+        return None
 
 
 def _output_times(output, duration: float) -> np.ndarray:
