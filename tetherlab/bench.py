@@ -139,21 +139,46 @@ def _print_table(title, rows):
         print("| " + " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in r.values()) + " |")
 
 
+#: benchmark modules in tetherlab/benchmarks/ with a ``bench_rows()`` (name, table title)
+EXTRA_SECTIONS = (
+    ("stiefel", "Stiefel-Scheifele: tetherlab's best method against heyoka at 1 m and 1 mm final error (issue 3)"),
+    ("deorbit", "Electrodynamic de-orbit, n = 1, whole mission, every integrator (issue 3)"),
+)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--max-rods", type=int, default=256)
     ap.add_argument("--skip-startup", action="store_true")
+    ap.add_argument("--only", nargs="*", default=None,
+                    help="sections to run: rhs scene effects startup (others come from tetherlab/benchmarks/)")
     args = ap.parse_args(argv)
-    rows = rhs_cost_table(args.max_rods)
-    _print_table("Right-hand-side cost per call (target: linear in n, <= 0.5 us/rod for n >= 16)", rows)
-    srows = scene_table()
-    _print_table("bench-libration.toml, 10 orbits (target: >= 30x faster than scipy on the same rhs)", srows)
-    by = {r["method"]: r for r in srows}
-    if "scipy:DOP853" in by:
-        for m in ("dop853", "radau5"):
-            if m in by:
-                print(f"speed-up {m} vs scipy:DOP853: {by['scipy:DOP853']['wall_s'] / by[m]['wall_s']:.1f}x")
-    if not args.skip_startup:
+    want = (lambda name: args.only is None or name in args.only)
+    if want("rhs"):
+        rows = rhs_cost_table(args.max_rods)
+        _print_table("Right-hand-side cost per call (target: linear in n, <= 0.5 us/rod for n >= 16)", rows)
+    if want("scene"):
+        srows = scene_table()
+        _print_table("bench-libration.toml, 10 orbits (target: >= 30x faster than scipy on the same rhs)", srows)
+        by = {r["method"]: r for r in srows}
+        if "scipy:DOP853" in by:
+            for m in ("dop853", "radau5"):
+                if m in by:
+                    print(f"speed-up {m} vs scipy:DOP853: {by['scipy:DOP853']['wall_s'] / by[m]['wall_s']:.1f}x")
+    if want("effects"):
+        from .benchmarks.effects import rhs_cost_rows
+
+        _print_table("Right-hand-side cost per call against the effects named (issue 3)", rhs_cost_rows())
+    for name, title in EXTRA_SECTIONS:
+        if want(name):
+            import importlib
+
+            try:
+                rows = importlib.import_module(f".benchmarks.{name}", __package__).bench_rows()
+            except ModuleNotFoundError:
+                continue
+            _print_table(title, rows)
+    if not args.skip_startup and want("startup"):
         _print_table("Start-up of `tetherlab run` (target: second run integrating within 3 s)", startup_table())
     print(f"\npeak RSS of this process: {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
     return 0
