@@ -240,6 +240,24 @@ def first_crossing(gold, gnew, ne):
 
 
 @njit(cache=True)
+def start_events(event, t, y, p, ne, ev, stats):
+    """Event buffers (g at the start, at the step end, scratch) and g(t, y) with the forced
+    side of a just-located event applied; returns (status, gold, gnew, gtmp), status 0 or the
+    event function's nonzero status (also stored in stats)."""
+    gold = np.zeros(max(ne, 1))
+    gnew = np.zeros(max(ne, 1))
+    gtmp = np.zeros(max(ne, 1))
+    st = 0
+    if ne > 0:
+        st = event(t, y.ctypes, gold.ctypes, p.ctypes)
+        if st != 0:
+            stats[ST_RHS_STATUS] = st
+        else:
+            apply_forced_side(gold, ne, ev)
+    return st, gold, gnew, gtmp
+
+
+@njit(cache=True)
 def apply_forced_side(gold, ne, ev):
     """Right after a located event the state sits within the bracket width of the root and may
     still evaluate on the old side; ev[2] >= 0 names that component and ev[3] its new-side value,
@@ -307,15 +325,9 @@ def dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, sta
         return RHS_FAILED, t, h, n_done
     if not all_finite(K[0]):
         return NON_FINITE, t, h, n_done
-    gold = np.zeros(max(ne, 1))
-    gnew = np.zeros(max(ne, 1))
-    gtmp = np.zeros(max(ne, 1))
-    if ne > 0:
-        st = event(t, y.ctypes, gold.ctypes, p.ctypes)
-        if st != 0:
-            stats[ST_RHS_STATUS] = st
-            return RHS_FAILED, t, h, n_done
-        apply_forced_side(gold, ne, ev)
+    st, gold, gnew, gtmp = start_events(event, t, y, p, ne, ev, stats)
+    if st != 0:
+        return RHS_FAILED, t, h, n_done
 
     hmax = h_max if h_max > 0.0 else np.inf
     if h <= 0.0:

@@ -52,10 +52,10 @@ from .dop853 import (
     STEP_UNDERFLOW,
     UNDERFLOW_FACTOR,
     all_finite,
-    apply_forced_side,
     event_time_tolerance,
     fill_start_outputs,
     first_crossing,
+    start_events,
     hinit,
     scaled_sq,
 )
@@ -189,6 +189,23 @@ def lu_solve(a, piv, b):
         for j in range(i + 1, n):
             s -= a[i, j] * b[j]
         b[i] = s / a[i, i]
+
+
+@njit(cache=True)
+def _collocation(y_new, z1, z2, z3, cont):
+    """The step's collocation polynomial in Hairer's CONTR5 form: y(t_new + s h) =
+    cont0 + s (cont1 + (s - C2M1)(cont2 + (s - C1M1) cont3)), s in [-1, 0]."""
+    for i in range(y_new.shape[0]):
+        z1i = z1[i]
+        z2i = z2[i]
+        c1 = (z2i - z3[i]) / C2M1
+        ak = (z1i - z2i) / C1MC2
+        acont3 = (ak - z1i / C1) / C2
+        c2 = (ak - c1) / C1M1
+        cont[0, i] = y_new[i]
+        cont[1, i] = c1
+        cont[2, i] = c2
+        cont[3, i] = c2 - acont3
 
 
 @njit(cache=True)
@@ -341,16 +358,10 @@ def radau5_core(
     tmp = np.empty(n)
     scal = np.empty(n)
     w = np.empty(n, dtype=np.complex128)
-    gold = np.zeros(max(ne, 1))
-    gnew = np.zeros(max(ne, 1))
-    gtmp = np.zeros(max(ne, 1))
     evc = np.zeros((4, n))
-    if ne > 0:
-        st = event(t, y.ctypes, gold.ctypes, p.ctypes)
-        if st != 0:
-            stats[ST_RHS_STATUS] = st
-            return RHS_FAILED, t, h, n_done
-        apply_forced_side(gold, ne, ev)
+    st, gold, gnew, gtmp = start_events(event, t, y, p, ne, ev, stats)
+    if st != 0:
+        return RHS_FAILED, t, h, n_done
 
     if not (resume and is_[_I_STARTED] != 0):
         st = rhs(t, y.ctypes, f0.ctypes, p.ctypes)
@@ -681,18 +692,7 @@ def radau5_core(
                     status = RHS_FAILED
                     break
                 if first_crossing(gold, gnew, ne):
-                    # collocation polynomial of this step (as CONTR5 below), s in [-1, 0]
-                    for i in range(n):
-                        z1i = z1[i]
-                        z2i = z2[i]
-                        c1 = (z2i - z3[i]) / C2M1
-                        ak = (z1i - z2i) / C1MC2
-                        acont3 = (ak - z1i / C1) / C2
-                        c2 = (ak - c1) / C1M1
-                        evc[0, i] = tmp[i]
-                        evc[1, i] = c1
-                        evc[2, i] = c2
-                        evc[3, i] = c2 - acont3
+                    _collocation(tmp, z1, z2, z3, evc)  # this step's polynomial, s in [-1, 0]
                     tol = event_time_tolerance(xph, h)
                     best = 0.0
                     comp = -1
@@ -752,16 +752,7 @@ def radau5_core(
             for i in range(n):
                 y[i] = tmp[i]
                 f0[i] = f1[i]
-                z1i = z1[i]
-                z2i = z2[i]
-                c1 = (z2i - z3[i]) / C2M1
-                ak = (z1i - z2i) / C1MC2
-                acont3 = (ak - z1i / C1) / C2
-                c2 = (ak - c1) / C1M1
-                cont[0, i] = y[i]
-                cont[1, i] = c1
-                cont[2, i] = c2
-                cont[3, i] = c2 - acont3
+            _collocation(y, z1, z2, z3, cont)
             # Outputs inside the step from the collocation polynomial, s = (t_o - t)/h in [-1, 0).
             while n_done < m and t_out[n_done] < t:
                 s = (t_out[n_done] - t) / hold
