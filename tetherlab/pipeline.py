@@ -116,6 +116,7 @@ def prepare(scene) -> Prepared:
             model=t.model,
             tip_mass_kg=scene.body(t.to_body).mass_kg,
             tip_name=t.to_body,
+            diameter_m=t.diameter_m,
         )
         for t in tethers
     ]
