@@ -130,6 +130,7 @@ def prepare(scene) -> Prepared:
             tip_mass_kg=scene.body(t.to_body).mass_kg,
             tip_name=t.to_body,
             tension_only=t.tension_only,
+            diameter_m=t.diameter_m,
         )
         for t in tethers
     ]

@@ -78,7 +78,7 @@ INTEGRATOR_METHODS = (
 QUADRATURE_RANGE = (1, 8)  # Gauss-Legendre nodes per half-rod
 # Effects whose field is singular at the origin of the scene frame (the central body's centre):
 # with one of them named, no body may start there.
-SINGULAR_AT_ORIGIN = ("central_gravity",)
+SINGULAR_AT_ORIGIN = ("central_gravity", "j2", "zonal")
 
 Vector3 = tuple[float, float, float]
 
@@ -227,7 +227,9 @@ class OutputSpec:
 @dataclass(frozen=True)
 class EffectUse:
     name: str
-    params_si: dict[str, float]  # every declared parameter, defaults filled, in ParamSpec.unit
+    # every declared parameter, defaults filled: an SI float in ParamSpec.unit, the string of a
+    # choice parameter, or {body name: SI float} for a per-body parameter
+    params_si: dict[str, Any]
 
 
 @dataclass(frozen=True)
@@ -574,6 +576,7 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     bodies = _parse_bodies(
         _required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu, origin_singular
     )
+    effects = _expand_per_body(effects, bodies)
     tethers = _parse_tethers(top.get("tethers", {}), bodies)
     orbit = _parse_orbit(top["orbit"], bodies, mu) if "orbit" in top else None
     tethers = _check_layout(bodies, tethers, orbit, mu)
@@ -655,20 +658,70 @@ def _parse_effects(value: Any) -> tuple[EffectUse, ...]:
             )
         spec = EFFECTS[name]
         table = _table(params, path, tuple(spec.params))
-        params_si: dict[str, float] = {}
+        params_si: dict[str, Any] = {}
         for pname, pspec in spec.params.items():
             key = _join(path, pname)
+            if pspec.choices is not None:
+                if pname in table:
+                    params_si[pname] = _choice(table[pname], key, pspec.choices)
+                elif pspec.required:
+                    raise SceneError(key, f"one of {_quoted(pspec.choices)}", _NOTHING)
+                elif pspec.default is not None:
+                    params_si[pname] = str(pspec.default)
+                continue
             kind = kind_for_unit(pspec.unit)
             if pname in table:
-                params_si[pname] = to_si(table[pname], kind, key=key)
+                if pspec.per_body and isinstance(table[pname], Mapping):
+                    params_si[pname] = {
+                        str(b): to_si(v, kind, key=_join(key, str(b))) for b, v in table[pname].items()
+                    }
+                else:
+                    params_si[pname] = to_si(table[pname], kind, key=key)
             elif pspec.required:
-                raise SceneError(key, kind.describe(), _NOTHING)
+                what = f"{kind.describe()}, or a table of one per body" if pspec.per_body else kind.describe()
+                raise SceneError(key, what, _NOTHING)
             elif pspec.default is not None:
                 # A float default is already in the declared SI unit; a string one is parsed.
                 default = pspec.default
                 params_si[pname] = float(default) if is_number(default) else to_si(default, kind, key=key)
         uses.append(EffectUse(name, params_si))
     return tuple(uses)
+
+
+def _expand_per_body(effects: tuple[EffectUse, ...], bodies: tuple[Body, ...]) -> tuple[EffectUse, ...]:
+    """Per-body effect parameters as {body: SI float} naming exactly the scene's bodies.
+
+    One value written for all bodies is expanded here; a table must name every body and no other
+    (a body silently left without, say, a drag area would be a hidden zero).
+    """
+    names = [b.name for b in bodies]
+    out = []
+    for use in effects:
+        spec = EFFECTS[use.name]
+        params = dict(use.params_si)
+        for pname, pspec in spec.params.items():
+            if not pspec.per_body or pname not in params:
+                continue
+            key = f"effects.{use.name}.{pname}"
+            value = params[pname]
+            if not isinstance(value, dict):
+                params[pname] = {n: float(value) for n in names}
+                continue
+            for b in value:
+                if b not in names:
+                    raise SceneError(
+                        f"{key}.{b}", f"a body of the scene ({_quoted(names)})", f"{b!r} (no such body)", hint=_suggest(b, names)
+                    )
+            missing = [n for n in names if n not in value]
+            if missing:
+                raise SceneError(
+                    f"{key}.{missing[0]}",
+                    f"a value for every body ({_quoted(names)}), or one value for all",
+                    _NOTHING,
+                )
+            params[pname] = {n: value[n] for n in names}
+        out.append(EffectUse(use.name, params))
+    return tuple(out)
 
 
 # -- bodies and states ------------------------------------------------------------------------
@@ -1210,6 +1263,19 @@ def _angles_dict(value) -> Any:
     return format_si(value, ANGLE)
 
 
+def _effect_params_dict(use: EffectUse) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in use.params_si.items():
+        unit = EFFECTS[use.name].params[k].unit
+        if isinstance(v, str):  # a choice parameter
+            out[k] = v
+        elif isinstance(v, dict):  # a per-body parameter
+            out[k] = {b: format_si(x, unit) for b, x in v.items()}
+        else:
+            out[k] = format_si(v, unit)
+    return out
+
+
 def _scene_to_dict(scene: Scene) -> dict[str, Any]:
     if (scene.duration_s is None) == (scene.duration_orbits is None):
         raise SceneError("duration", "exactly one of duration_s and duration_orbits set", "both or neither")
@@ -1227,10 +1293,7 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
         "mu": format_si(cb.mu_m3_s2, GRAVITATIONAL_PARAMETER),
         "radius": format_si(cb.radius_m, LENGTH),
     }
-    out["effects"] = {
-        use.name: {k: format_si(v, EFFECTS[use.name].params[k].unit) for k, v in use.params_si.items()}
-        for use in scene.effects
-    }
+    out["effects"] = {use.name: _effect_params_dict(use) for use in scene.effects}
     bodies = {}
     for b in scene.bodies:
         entry: dict[str, Any] = {} if (b.fixed and b.mass_kg == 0.0) else {"mass": format_si(b.mass_kg, MASS)}

@@ -35,6 +35,7 @@ class TetherSpec:
     model: str = "paper"  # "paper" | "energy"
     tip_mass_kg: float = 0.0  # 0: free end (no tip body)
     tip_name: str = ""
+    diameter_m: float | None = None  # for effects on the tether's cross-section (drag); None: unknown
     tension_only: bool = False  # no axial force in compression (slack tether)
 
 

@@ -23,10 +23,23 @@ from typing import Callable
 
 @dataclass(frozen=True)
 class ParamSpec:
+    """One parameter of an effect.
+
+    Three shapes, all validated when the scene is loaded:
+
+    * a quantity (the default): ``unit`` is the astropy unit of the SI float handed on;
+    * ``choices``: a string among ``choices`` (``unit`` is ignored), kept as the string;
+    * ``per_body``: a quantity per body, written either as one quantity for every body or as a
+      table ``{body_name = quantity}`` naming every body of the scene; kept as a dict
+      ``{body_name: SI float}`` (one value given for all is expanded once the bodies are known).
+    """
+
     unit: str  # astropy unit string of the SI value handed to the kernel ("" = dimensionless)
     required: bool = True
     default: str | float | None = None
     doc: str = ""
+    choices: tuple[str, ...] | None = None
+    per_body: bool = False
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,7 @@ from __future__ import annotations
 from .._jit import njit
 from ..forces import applied_force, central_gravity, uniform_gravity
 from ..forces import third_body, zonal  # gravity family, codes 10-13
+from ..forces import drag, electrodynamic  # codes 20-29
 from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_CNT, H_OFF_EFF
 
 
@@ -65,6 +66,11 @@ def body_force(p, t, body, x, y, z, vx, vy, vz, mass):
             fx += mass * ax
             fy += mass * ay
             fz += mass * az
+        elif code == drag.CODE:  # (electrodynamic: no force on point masses)
+            ax, ay, az = drag.body_force(p, par, body, x, y, z, vx, vy, vz)
+            fx += ax
+            fy += ay
+            fz += az
     return fx, fy, fz
 
 
@@ -103,6 +109,16 @@ def rod_force_density(p, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
             fx += mass_per_xi * ax
             fy += mass_per_xi * ay
             fz += mass_per_xi * az
+        elif code == electrodynamic.CODE:
+            ax, ay, az = electrodynamic.rod_density(p, par, t, x, y, z, tx, ty, tz)
+            fx += ax
+            fy += ay
+            fz += az
+        elif code == drag.CODE:
+            ax, ay, az = drag.rod_density(p, par, rod, x, y, z, vx, vy, vz, tx, ty, tz)
+            fx += ax
+            fy += ay
+            fz += az
     return fx, fy, fz
 
 

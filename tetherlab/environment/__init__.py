@@ -1,0 +1,1 @@
+"""Models of the space environment (magnetic field, atmosphere) used by the effects in forces/."""

@@ -1,0 +1,97 @@
+"""The geomagnetic field as a centred dipole: aligned with the rotation axis, or tilted and rotating
+with the Earth.  Derivation: docs/effects-electrodynamic.md, section 1.
+
+A centred dipole of strength vector K (T m^3; K = mu_0 m / (4 pi) for a magnetic moment m in
+A m^2) has the field
+
+    B(r) = (3 (K . r) r - |r|^2 K) / |r|^5,
+
+the negative gradient of the scalar potential V = K . r / |r|^3.  The degree-1 Gauss coefficients
+of a spherical-harmonic model with reference radius a give, in Earth-fixed axes,
+K = a^3 (g11, h11, g10) (Langel 1987, Geomagnetism vol. 1, ch. 4; docs section 1.1).
+
+Constants (SI):
+
+| name | value | source |
+|------|-------|--------|
+| IGRF13_G10_T, IGRF13_G11_T, IGRF13_H11_T | -29404.8, -1450.9, 4652.5 nT | IGRF-13, epoch 2020.0 (Alken et al. 2021, Earth Planets Space 73:49, table of coefficients) |
+| IGRF_REFERENCE_RADIUS_M | 6371.2 km | IGRF reference radius (same source) |
+| EARTH_ROTATION_RATE_RAD_S | 7.292115e-5 rad/s | WGS 84 (NIMA TR8350.2, table 3.1) |
+
+All kernels take SI floats only; the Earth's rotation enters through the angle
+theta(t) = greenwich_angle + omega_E t of the Earth-fixed x axis from the inertial x axis.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .._jit import njit
+from .earth import EARTH_ROTATION_RATE_RAD_S
+
+IGRF13_G10_T = -29404.8e-9
+IGRF13_G11_T = -1450.9e-9
+IGRF13_H11_T = 4652.5e-9
+IGRF_REFERENCE_RADIUS_M = 6371.2e3
+
+#: Dipole strength |K| = a^3 sqrt(g10^2 + g11^2 + h11^2) of IGRF-13 at 2020.0 (T m^3): about
+#: 7.71e15 T m^3, i.e. a moment of 7.71e22 A m^2 and 29.8 uT at the equator of the 6371.2 km sphere.
+IGRF13_DIPOLE_T_M3 = IGRF_REFERENCE_RADIUS_M**3 * math.sqrt(
+    IGRF13_G10_T**2 + IGRF13_G11_T**2 + IGRF13_H11_T**2
+)
+
+#: Unit vector of K in Earth-fixed axes (x to Greenwich on the equator, z to the north pole).
+#: K points to the southern hemisphere (g10 < 0): the field lines leave the Earth in the south.
+IGRF13_AXIS_ECEF = tuple(
+    c * IGRF_REFERENCE_RADIUS_M**3 / IGRF13_DIPOLE_T_M3 for c in (IGRF13_G11_T, IGRF13_H11_T, IGRF13_G10_T)
+)
+
+#: Field model codes stored in the parameter block.
+FIELD_ALIGNED = 0
+FIELD_TILTED = 1
+FIELD_CODES = {"aligned": FIELD_ALIGNED, "tilted": FIELD_TILTED}
+
+
+def pack_field(model: str, strength_t_m3: float, greenwich_angle_rad: float) -> list[float]:
+    """The 6 floats the kernel :func:`field` reads: code, |K|, unit axis in Earth-fixed axes, angle."""
+    if model == "aligned":
+        axis = (0.0, 0.0, -1.0)  # along -z: the sign of g10 (the field points north at the equator)
+    else:
+        axis = IGRF13_AXIS_ECEF
+    return [float(FIELD_CODES[model]), strength_t_m3, *axis, greenwich_angle_rad]
+
+
+FIELD_NPAR = 6
+
+
+@njit(cache=True)
+def dipole(kx, ky, kz, x, y, z):
+    """Field (T) of a centred dipole of strength vector K (T m^3) at r (m)."""
+    r2 = x * x + y * y + z * z
+    r = math.sqrt(r2)
+    kr = kx * x + ky * y + kz * z
+    inv5 = 1.0 / (r2 * r2 * r)
+    return (
+        (3.0 * kr * x - r2 * kx) * inv5,
+        (3.0 * kr * y - r2 * ky) * inv5,
+        (3.0 * kr * z - r2 * kz) * inv5,
+    )
+
+
+@njit(cache=True)
+def field(p, par, t, x, y, z):
+    """Field (T) at inertial r (m), time t (s since the scene epoch), for the packed model at p[par:].
+
+    aligned: K = |K| (0, 0, -1), fixed in inertial axes.  tilted: the Earth-fixed axis rotated
+    about z by theta(t) = greenwich_angle + omega_E t.
+    """
+    s = p[par + 1]
+    ax = p[par + 2]
+    ay = p[par + 3]
+    az = p[par + 4]
+    if int(p[par]) == FIELD_TILTED:
+        th = p[par + 5] + EARTH_ROTATION_RATE_RAD_S * t
+        c = math.cos(th)
+        sn = math.sin(th)
+        ax, ay = c * ax - sn * ay, sn * ax + c * ay
+    return dipole(s * ax, s * ay, s * az, x, y, z)

@@ -1,0 +1,72 @@
+"""Electrodynamic (Lorentz) force of a constant current along each tether in a dipole field.
+
+Force per unit of the rod coordinate xi: dF/dxi = I (dr/dxi) x B(r); on a straight rod in a
+uniform field the total is I L_a u x B.  No force on point masses.  The half-rod totals R_1, R_2
+and the correction F_TP of paper eq. 13 follow from the Gauss-Legendre quadrature of this density
+in tether/chain.py (docs/effects-electrodynamic.md, section 2).
+
+Sign convention: a positive current flows from end A_1 (the tether's ``from`` body) towards B_n
+(its ``to`` body), i.e. along dr/dxi.  On a prograde orbit with the ``to`` body above the
+``from`` body and the dipole of the Earth (field pointing north at the equator), I > 0 gives a
+drag (de-orbit), I < 0 a thrust.
+
+Reference: paper section 5 (constant current, dipole aligned with the rotation axis).
+
+| parameter | unit | required | meaning |
+|-----------|------|----------|---------|
+| current | A | yes | current along every tether, > 0 from ``from`` to ``to`` |
+| field | choice | no ("aligned") | "aligned": dipole along -z (rotation axis); "tilted": IGRF-13 2020 dipole axis, rotating with the Earth |
+| dipole_strength | T m3 | no (IGRF-13 2020, 7.71e15 T m3) | |K| = mu_0 m / (4 pi) of the dipole |
+| greenwich_angle | rad | no (0 deg) | "tilted" only: angle of the Greenwich meridian from the inertial x axis at t = 0 |
+"""
+
+from __future__ import annotations
+
+from ..environment import magnetic
+from ..errors import SceneError
+from .registry import EffectSpec, ParamSpec, register
+
+CODE = 20
+
+
+def _pack(params, central, ctx):
+    strength = params["dipole_strength"]
+    if not strength > 0.0:
+        raise SceneError("effects.electrodynamic.dipole_strength", "a dipole strength > 0 (e.g. '8e15 T m3')", repr(strength))
+    return [params["current"], *magnetic.pack_field(params["field"], strength, params["greenwich_angle"])]
+
+
+SPEC = register(
+    EffectSpec(
+        name="electrodynamic",
+        code=CODE,
+        doc="Lorentz force I dr x B of a constant current along every tether in a dipole field.",
+        params={
+            "current": ParamSpec("A", doc="current, > 0 flowing from the tether's `from` body to its `to` body"),
+            "field": ParamSpec("", required=False, default="aligned", choices=tuple(magnetic.FIELD_CODES),
+                               doc="dipole model"),
+            "dipole_strength": ParamSpec("T m3", required=False, default=magnetic.IGRF13_DIPOLE_T_M3,
+                                         doc="|K| = mu_0 m / (4 pi); default IGRF-13 2020"),
+            "greenwich_angle": ParamSpec("rad", required=False, default=0.0,
+                                         doc="Earth rotation angle at t = 0 (tilted field only)"),
+        },
+        velocity_dependent=False,  # the current is prescribed, not driven by the motional EMF
+        conservative=False,
+        pack=_pack,
+    )
+)
+
+# -- compiled kernels (SI floats only) -----------------------------------------------------------
+from .._jit import njit  # noqa: E402
+
+
+@njit(cache=True)
+def rod_density(p, par, t, x, y, z, tx, ty, tz):
+    """I (dr/dxi) x B(r): force per unit xi (N) on a rod element at r with tangent dr/dxi."""
+    current = p[par]
+    bx, by, bz = magnetic.field(p, par + 1, t, x, y, z)
+    return (
+        current * (ty * bz - tz * by),
+        current * (tz * bx - tx * bz),
+        current * (tx * by - ty * bx),
+    )
