@@ -20,7 +20,7 @@ Adding an effect = one module in tetherlab/forces/ + one branch in each function
 from __future__ import annotations
 
 from .._jit import njit
-from ..forces import central_gravity
+from ..forces import central_gravity, stiefel_moon
 from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_CNT, H_OFF_EFF
 
 
@@ -41,6 +41,11 @@ def body_force(p, t, body, x, y, z, vx, vy, vz, mass):
             fx += mass * ax
             fy += mass * ay
             fz += mass * az
+        elif code == stiefel_moon.CODE:
+            ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
+            fx += mass * ax
+            fy += mass * ay
+            fz += mass * az
     return fx, fy, fz
 
 
@@ -58,6 +63,11 @@ def rod_force_density(p, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
         p[cnt + code] += 1.0
         if code == central_gravity.CODE:
             ax, ay, az = central_gravity.accel(p[par], x, y, z)
+            fx += mass_per_xi * ax
+            fy += mass_per_xi * ay
+            fz += mass_per_xi * az
+        elif code == stiefel_moon.CODE:
+            ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
             fx += mass_per_xi * ax
             fy += mass_per_xi * ay
             fz += mass_per_xi * az
