@@ -134,6 +134,8 @@ def prepare(scene) -> Prepared:
         quadrature=nq,
         root_fixed=bool(getattr(root, "fixed", False)),
         root_name=root_name,
+        epoch=scene.epoch,
+        duration_s=_duration_hint(scene),
     )
     y0, r_ref, v_ref, sides = _initial_state(scene, model, root_name, tethers, mu)
 
@@ -203,6 +205,14 @@ def _formulation(scene, model: Model, tethers, y0: np.ndarray) -> str:
                              "outputs on the osculating ellipse)", repr(name))  # fmt: skip
         return "dromo-sigma"
     return "dromo-time"
+
+
+def _duration_hint(scene) -> float | None:
+    """The run length for effects fitted over the run (before the initial state is laid out)."""
+    try:
+        return scene.duration_seconds()
+    except ValueError:  # "N orbits" without an orbit: refused below with a SceneError
+        return None
 
 
 def _output_times(output, duration: float) -> np.ndarray:

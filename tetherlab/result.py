@@ -141,6 +141,7 @@ class Result:
                 "rtol": prep.rtol,
             },
             "effect_evaluations": _effect_counts(p, model),
+            "effect_meta": model.effect_meta,  # e.g. ephemeris fit errors (forces/third_body.py)
         }
         return cls(ts, dg, stats, int(status), message, scene_dict, meta)
 

@@ -50,6 +50,7 @@ class Model:
     quadrature: int
     root_name: str = "m0"
     rod_slices: list[slice] = field(default_factory=list)  # global rod indices of each tether
+    effect_meta: dict = field(default_factory=dict)  # what effects report at pack time (fit errors)
 
     @property
     def n_rods(self) -> int:
@@ -96,8 +97,14 @@ def build_model(
     quadrature: int = 2,
     root_fixed: bool = False,
     root_name: str = "m0",
+    epoch: str | None = None,
+    duration_s: float | None = None,
 ) -> Model:
-    """Pack the parameter block.  Inputs are SI floats that the scene layer has validated."""
+    """Pack the parameter block.  Inputs are SI floats that the scene layer has validated.
+
+    ``epoch`` (ISO date, TDB) and ``duration_s`` are for time-dependent effects (ephemerides fitted
+    over the run); effects that do not need them ignore them.
+    """
     nteth = len(tethers)
     nrods = sum(t.rods for t in tethers)
     n_state = 6 * (1 + nrods)
@@ -108,6 +115,9 @@ def build_model(
         "bodies": [root_name] + [t.tip_name for t in tethers],
         "tethers": list(tethers),
         "root_fixed": root_fixed,
+        "epoch": epoch,
+        "duration_s": duration_s,
+        "meta": {},  # effects put what the result's meta should report here (by effect name)
     }
     eff_params: list[list[float]] = [
         list(spec.pack(params, central, ctx)) if spec.pack else [] for spec, params in effects
@@ -189,6 +199,7 @@ def build_model(
         quadrature=quadrature,
         root_name=root_name,
         rod_slices=rod_slices,
+        effect_meta=ctx["meta"],
     )
 
 

@@ -20,7 +20,9 @@ Adding an effect = one module in tetherlab/forces/ + one branch in each function
 from __future__ import annotations
 
 from .._jit import njit
-from ..forces import central_gravity, stiefel_moon
+from ..forces import central_gravity
+from ..forces import stiefel_moon  # Stiefel-Scheifele analytic Moon, code 30
+from ..forces import third_body, zonal  # gravity family, codes 10-13
 from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_CNT, H_OFF_EFF
 
 
@@ -38,6 +40,22 @@ def body_force(p, t, body, x, y, z, vx, vy, vz, mass):
         p[cnt + code] += 1.0
         if code == central_gravity.CODE:
             ax, ay, az = central_gravity.accel(p[par], x, y, z)
+            fx += mass * ax
+            fy += mass * ay
+            fz += mass * az
+        # -- gravity family (codes 10-13): zonal harmonics, DE421 third bodies
+        elif code == zonal.CODE_J2:
+            ax, ay, az = zonal.accel_j2(p[par], p[par + 1], p[par + 2], x, y, z)
+            fx += mass * ax
+            fy += mass * ay
+            fz += mass * az
+        elif code == zonal.CODE_ZONAL:
+            ax, ay, az = zonal.accel(p[par], p[par + 1], p[par + 2], p[par + 3], p[par + 4], x, y, z)
+            fx += mass * ax
+            fy += mass * ay
+            fz += mass * az
+        elif code == third_body.CODE_MOON or code == third_body.CODE_SUN:
+            ax, ay, az = third_body.accel(p, par, t, x, y, z)
             fx += mass * ax
             fy += mass * ay
             fz += mass * az
@@ -66,6 +84,22 @@ def rod_force_density(p, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
             fx += mass_per_xi * ax
             fy += mass_per_xi * ay
             fz += mass_per_xi * az
+        # -- gravity family (codes 10-13): zonal harmonics, DE421 third bodies
+        elif code == zonal.CODE_J2:
+            ax, ay, az = zonal.accel_j2(p[par], p[par + 1], p[par + 2], x, y, z)
+            fx += mass_per_xi * ax
+            fy += mass_per_xi * ay
+            fz += mass_per_xi * az
+        elif code == zonal.CODE_ZONAL:
+            ax, ay, az = zonal.accel(p[par], p[par + 1], p[par + 2], p[par + 3], p[par + 4], x, y, z)
+            fx += mass_per_xi * ax
+            fy += mass_per_xi * ay
+            fz += mass_per_xi * az
+        elif code == third_body.CODE_MOON or code == third_body.CODE_SUN:
+            ax, ay, az = third_body.accel(p, par, t, x, y, z)
+            fx += mass_per_xi * ax
+            fy += mass_per_xi * ay
+            fz += mass_per_xi * az
         elif code == stiefel_moon.CODE:
             ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
             fx += mass_per_xi * ax
@@ -85,4 +119,10 @@ def potential_per_mass(p, t, x, y, z):
         par = int(p[off + e * ET_SIZE + ET_OFF_PAR])
         if code == central_gravity.CODE:
             u += central_gravity.potential(p[par], x, y, z)
+        # -- gravity family: zonal harmonics (the DE421 third bodies are time-dependent, not
+        # conservative, so their potential stays out of the energy: forces/third_body.py)
+        elif code == zonal.CODE_J2:
+            u += zonal.potential_j2(p[par], p[par + 1], p[par + 2], x, y, z)
+        elif code == zonal.CODE_ZONAL:
+            u += zonal.potential(p[par], p[par + 1], p[par + 2], p[par + 3], p[par + 4], x, y, z)
     return u
