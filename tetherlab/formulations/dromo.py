@@ -459,6 +459,7 @@ def integrate_sigma(method, p_ext, r0_m, v0_m_s, t_out, rtol, atol, mu, length_m
     # pass 2: each requested time by Newton on t(sigma) from its bracketing grid state
     rows = []
     n_newton = 0
+    search: dict = {}  # cost of the time searches, reported apart from the sigma pass
     for tk in tt:
         j = int(np.searchsorted(tg, tk, side="right")) - 1
         if j < 0 or j >= len(S) - 1 and tk > tg[-1]:
@@ -467,7 +468,7 @@ def integrate_sigma(method, p_ext, r0_m, v0_m_s, t_out, rtol, atol, mu, length_m
             sig_k, z_k, g = float(S[j]), Z[j], tk - tg[j]
         else:
             sig_k, z_k, g, nn, st = _solve_time(method, p_ext, float(S[j]), Z[j], float(S[j + 1] - S[j]),
-                                                tk, T, rtol, atol_v, stats)  # fmt: skip
+                                                tk, T, rtol, atol_v, search)  # fmt: skip
             n_newton += nn
             if st != 0:
                 status, message = st, f"time search near t={tk!r} s failed (status {st})"
@@ -478,6 +479,8 @@ def integrate_sigma(method, p_ext, r0_m, v0_m_s, t_out, rtol, atol, mu, length_m
     t_done = tt[: len(rows)].copy()
     stats["wall_s"] = wall
     stats["newton_integrations"] = n_newton
+    for k in _STAT_KEYS:
+        stats["search_" + k] = search.get(k, 0)
     stats["sigma_end"] = float(S[-1])
     z_end = Z[-1]
     r_end, v_end = dromo_to_cartesian(float(S[-1]), z_end[1:8], mu, length_m)
