@@ -92,9 +92,10 @@ def geometry(sigma, y):
 
 
 @njit(cache=True)
-def sigma_rates(sigma, y, fr, ft, fn, dy):
+def sigma_rates(c, sn, y, fr, ft, fn, dy):
     """d/dsigma of [tau, q1, q2, q3, eta1..eta4] into dy[0:8], for the non-dimensional
-    perturbation (fr, ft, fn) in the orbital frame (sheet s5; docs/dromo.md section 3)."""
+    perturbation (fr, ft, fn) in the orbital frame (sheet s5; docs/dromo.md section 3);
+    c, sn = cos sigma, sin sigma."""
     q1 = y[1]
     q2 = y[2]
     q3 = y[3]
@@ -102,8 +103,6 @@ def sigma_rates(sigma, y, fr, ft, fn, dy):
     e2 = y[5]
     e3 = y[6]
     e4 = y[7]
-    c = math.cos(sigma)
-    sn = math.sin(sigma)
     s = 1.0 + q1 * c + q2 * sn
     q3s = q3 * q3 * q3 * s * s
     den = q3s * q3 * s  # q3^4 s^3
@@ -130,11 +129,11 @@ def root_state(sigma, y, L, T):
     vr = (L / T) * q3 * kap
     vt = (L / T) * q3 * s
     return (rn * ix, rn * iy, rn * iz, vr * ix + vt * jx, vr * iy + vt * jy, vr * iz + vt * jz,
-            ix, iy, iz, jx, jy, jz, kx, ky, kz)  # fmt: skip
+            ix, iy, iz, jx, jy, jz, kx, ky, kz, c, sn)  # fmt: skip
 
 
 @njit(cache=True)
-def _perturbation_rates(sigma, y, ax_, ay_, az_, rx, ry, rz, ix, iy, iz, jx, jy, jz, kx, ky, kz,
+def _perturbation_rates(c, sn, y, ax_, ay_, az_, rx, ry, rz, ix, iy, iz, jx, jy, jz, kx, ky, kz,
                         mu, L, dy):  # fmt: skip
     """Subtract central gravity from the total acceleration (SI), project, scale, rates in dy."""
     r2 = rx * rx + ry * ry + rz * rz
@@ -146,7 +145,7 @@ def _perturbation_rates(sigma, y, ax_, ay_, az_, rx, ry, rz, ix, iy, iz, jx, jy,
     fr = (px * ix + py * iy + pz * iz) * scale
     ft = (px * jx + py * jy + pz * jz) * scale
     fn = (px * kx + py * ky + pz * kz) * scale
-    sigma_rates(sigma, y, fr, ft, fn, dy)
+    sigma_rates(c, sn, y, fr, ft, fn, dy)
 
 
 @rhs_cfunc
@@ -158,10 +157,10 @@ def dromo_sigma_rhs(sigma, y_ptr, dy_ptr, p_ptr):
     mu = p[off + FP_MU]
     L = p[off + FP_L]
     T = p[off + FP_T]
-    rx, ry, rz, vx, vy, vz, ix, iy, iz, jx, jy, jz, kx, ky, kz = root_state(sigma, y, L, T)
+    rx, ry, rz, vx, vy, vz, ix, iy, iz, jx, jy, jz, kx, ky, kz, c, sn = root_state(sigma, y, L, T)
     m0 = p[H_ROOT_M]
     fx, fy, fz = body_force(p, T * y[0], 0, rx, ry, rz, vx, vy, vz, m0)
-    _perturbation_rates(sigma, y, fx / m0, fy / m0, fz / m0, rx, ry, rz, ix, iy, iz, jx, jy, jz,
+    _perturbation_rates(c, sn, y, fx / m0, fy / m0, fz / m0, rx, ry, rz, ix, iy, iz, jx, jy, jz,
                         kx, ky, kz, mu, L, dy)  # fmt: skip
     return 0
 
@@ -183,7 +182,7 @@ def dromo_time_rhs(t, y_ptr, dy_ptr, p_ptr):
     qd = p[b + h : b + 2 * h]
     acc = p[b + 2 * h : b + 3 * h]
     sigma = y[0]
-    rx, ry, rz, vx, vy, vz, ix, iy, iz, jx, jy, jz, kx, ky, kz = root_state(sigma, y, L, T)
+    rx, ry, rz, vx, vy, vz, ix, iy, iz, jx, jy, jz, kx, ky, kz, c, sn = root_state(sigma, y, L, T)
     q[0] = rx
     q[1] = ry
     q[2] = rz
@@ -196,7 +195,7 @@ def dromo_time_rhs(t, y_ptr, dy_ptr, p_ptr):
     status = accelerations(t, q, qd, p, acc)
     if status != 0:
         return status
-    _perturbation_rates(sigma, y, acc[0], acc[1], acc[2], rx, ry, rz, ix, iy, iz, jx, jy, jz,
+    _perturbation_rates(c, sn, y, acc[0], acc[1], acc[2], rx, ry, rz, ix, iy, iz, jx, jy, jz,
                         kx, ky, kz, mu, L, dy)  # fmt: skip
     # dsigma/dt = h/r^2 = q3^3 s^2 / T = 1 / (T dtau/dsigma); element rates by the chain rule
     dsig_dt = 1.0 / (T * dy[0])
@@ -269,8 +268,8 @@ def cartesian_to_dromo(r_m, v_m_s, mu_m3_s2: float, length_m: float, sigma0: flo
     r = np.asarray(r_m, float) / L
     v = np.asarray(v_m_s, float) / (L / T)
     hv = np.cross(r, v)
-    h = float(np.linalg.norm(hv))
-    rr = float(np.linalg.norm(r))
+    h = math.sqrt(float(hv @ hv))
+    rr = math.sqrt(float(r @ r))
     if not (h > 0.0 and rr > 0.0):
         raise ValueError(f"DROMO needs a non-zero angular momentum and radius; got |h|={h!r}, |r|={rr!r} (units L, T)")
     i = r / rr
