@@ -59,6 +59,8 @@ class Prepared:
     # shape 'equilibrium': the external force R_f on the end mass that holds the starting shape
     # (tetherlab.statics); the run itself applies it only if the scene names it (applied_force)
     holding_force_N: np.ndarray | None = None
+    formulation: str = "cowell"  # "cowell", "dromo-sigma" (point mass) or "dromo-time"
+    mu_m3_s2: float = 0.0
 
 
 def _state_of(entity, mu: float):
@@ -198,6 +200,12 @@ def prepare(scene) -> Prepared:
         duration = scene.duration_orbits * period
     t_out = _output_times(scene.output, duration)
     h_max = scene.integrator.max_step_s or 0.0
+    formulation = _formulation(scene, model, tethers, y0)
+    if event_names and formulation != "cowell":
+        raise SceneError(
+            "integrator.formulation", "'cowell' for a scene with events (tension_only tethers or [stop]: "
+            "located by the Cowell path only for now)", repr(scene.integrator.formulation),
+        )
     return Prepared(
         model=model,
         y0=y0,
@@ -213,6 +221,8 @@ def prepare(scene) -> Prepared:
         event_names=tuple(event_names),
         event_terminal=tuple(event_terminal),
         holding_force_N=holding,
+        formulation=formulation,
+        mu_m3_s2=mu,
     )
 
 
@@ -255,6 +265,36 @@ def _static_start(scene, root, tethers, specs, effects, central, nq, y0):
     except ValueError as exc:
         raise SceneError(path, "a tether with a static equilibrium between its placed ends", str(exc)) from None
     return eq.y, eq.holding_force_N
+
+
+def _formulation(scene, model: Model, tethers, y0: np.ndarray) -> str:
+    """The formulation the integrator runs, checked against the scene (docs/dromo.md section 7)."""
+    name = scene.integrator.formulation
+    if name == "cowell":
+        return "cowell"
+    key = "integrator.formulation"
+    if "central_gravity" not in model.effect_names:
+        # DROMO integrates the Kepler motion about the central body analytically: without
+        # central_gravity in [effects] it would add a force the scene did not name
+        raise SceneError(key, "'cowell' when [effects] does not name central_gravity (DROMO builds it in)", repr(name))
+    if model.root_fixed:
+        raise SceneError(key, "'cowell' for a scene whose root body is fixed (it has no orbit)", repr(name))
+    if name == "dromo" and not tethers:
+        if scene.integrator.max_step_s is not None:
+            raise SceneError(
+                "integrator.max_step", "no max_step with formulation 'dromo' on a point mass (the independent "
+                "variable is the ideal anomaly; use 'dromo-time' to bound the time step)", f"{scene.integrator.max_step_s} s",
+            )
+        h = y0.size // 2
+        r, v = y0[:3], y0[h : h + 3]
+        energy = 0.5 * float(v @ v) - scene.central_body.mu_m3_s2 / float(np.linalg.norm(r))
+        if not energy < 0:
+            raise SceneError(key, "'dromo-time' for an orbit that is not elliptic (the sigma form schedules its "
+                             "outputs on the osculating ellipse)", repr(name))  # fmt: skip
+        return "dromo-sigma"
+    return "dromo-time"
+
+
 def _duration_hint(scene) -> float | None:
     """The run length for effects fitted over the run (before the initial state is laid out)."""
     try:
@@ -457,13 +497,61 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     computed before the failure (or, with ``raise_on_failure=False``, returns that result with
     ``result.ok`` false and ``result.message`` saying when, where and why).
     """
-    from .integrators.driver import integrate
-
     prep = prepare(scene)
     p = prep.model.fresh_params()
     bar = _ProgressBar(prep.t_out[-1], enabled=progress)
     t_wall = time.perf_counter()
-    res = integrate(
+    if prep.formulation != "cowell":
+        res, p = _integrate_dromo(prep, p, bar.update)
+    else:
+        res = _integrate_cowell(prep, p, bar.update)
+    bar.close()
+    stats = dict(res.stats)
+    stats["total_wall_s"] = time.perf_counter() - t_wall
+    stats["formulation"] = prep.formulation
+    stats["events"] = [
+        {"t_s": float(te), "event": prep.event_names[k], "side": "taut" if side > 0 else "slack"}
+        if prep.event_names[k].startswith("slack.") else
+        {"t_s": float(te), "event": prep.event_names[k]}
+        for te, k, side in getattr(res, "events", ())
+    ]  # fmt: skip
+    stopped = getattr(res, "stopped_by", None)
+    stats["stopped_by"] = None if stopped is None else prep.event_names[stopped]
+    message = res.message if res.status == 0 else failure_message(p, prep.model, res.status, res.t_end, res.message)
+    d = diag.compute(prep.model, res.t, res.y)
+    result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)
+    if res.status != 0 and raise_on_failure:
+        raise SimulationError(message, result)
+    return result
+
+
+def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
+    """DROMO run with outputs converted back to Cowell states [r0, d, v0, d'] (docs/dromo.md 7)."""
+    from .formulations import dromo
+    from .kernel.layout import FORM_DROMO_SIGMA, FORM_DROMO_TIME
+
+    h = prep.y0.size // 2
+    length_m = float(np.linalg.norm(prep.y0[:3]))  # L = |r0| (docs/dromo.md section 2)
+    if prep.formulation == "dromo-sigma":
+        pe = dromo.attach(p, FORM_DROMO_SIGMA, prep.mu_m3_s2, length_m, prep.y0.size)
+        res = dromo.integrate_sigma(
+            prep.method, pe, prep.y0[:3], prep.y0[h : h + 3], prep.t_out, prep.rtol,
+            prep.atol[0] / prep.ref_radius_m, prep.mu_m3_s2, length_m, max_steps=prep.max_steps,
+            progress=progress,
+        )  # fmt: skip
+    else:
+        pe = dromo.attach(p, FORM_DROMO_TIME, prep.mu_m3_s2, length_m, prep.y0.size)
+        res = dromo.integrate_time(
+            prep.method, pe, prep.y0, prep.t_out, prep.rtol, prep.atol, prep.mu_m3_s2, length_m,
+            h_max=prep.h_max, max_steps=prep.max_steps, progress=progress,
+        )  # fmt: skip
+    return res, pe
+
+
+def _integrate_cowell(prep: Prepared, p: np.ndarray, progress):
+    from .integrators.driver import integrate
+
+    return integrate(
         prep.method,
         cowell_rhs,
         0.0,
@@ -474,26 +562,10 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
         prep.atol,
         h_max=prep.h_max,
         max_steps=prep.max_steps,
-        progress=bar.update,
+        progress=progress,
         second_order=True,  # Cowell: y = [q, q'], so RADAU5 can halve its Newton systems
         **_event_args(prep),
     )
-    bar.close()
-    stats = dict(res.stats)
-    stats["total_wall_s"] = time.perf_counter() - t_wall
-    stats["events"] = [
-        {"t_s": float(te), "event": prep.event_names[k], "side": "taut" if side > 0 else "slack"}
-        if prep.event_names[k].startswith("slack.") else
-        {"t_s": float(te), "event": prep.event_names[k]}
-        for te, k, side in res.events
-    ]  # fmt: skip
-    stats["stopped_by"] = None if res.stopped_by is None else prep.event_names[res.stopped_by]
-    message = res.message if res.status == 0 else failure_message(p, prep.model, res.status, res.t_end, res.message)
-    d = diag.compute(prep.model, res.t, res.y)
-    result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)
-    if res.status != 0 and raise_on_failure:
-        raise SimulationError(message, result)
-    return result
 
 
 class _ProgressBar:

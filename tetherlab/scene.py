@@ -213,6 +213,13 @@ class IntegratorSpec:
     atol: float = 1e-10  # in units of each state component's natural scale
     max_step_s: float | None = None
     max_steps: int | None = None
+    # "cowell", or "dromo": the orbit in DROMO elements (docs/dromo.md); for a single point mass
+    # with the ideal anomaly as independent variable, with tethers in time form; "dromo-time":
+    # the time form always
+    formulation: str = "cowell"
+
+
+FORMULATIONS = ("cowell", "dromo", "dromo-time")
 
 
 @dataclass(frozen=True)
@@ -1188,7 +1195,7 @@ def _parse_stop(value: Any, central: CentralBody) -> Stop:
 
 def _parse_integrator(value: Any) -> IntegratorSpec:
     path = "integrator"
-    table = _table(value, path, ("method", "rtol", "atol", "max_step", "max_steps"))
+    table = _table(value, path, ("method", "rtol", "atol", "max_step", "max_steps", "formulation"))
     method = _choice(table.get("method", "dop853"), f"{path}.method", INTEGRATOR_METHODS)
     rtol = _number(table.get("rtol", 1e-10), f"{path}.rtol", "a relative tolerance in (0, 1)")
     if not 0.0 < rtol < 1.0:
@@ -1198,7 +1205,8 @@ def _parse_integrator(value: Any) -> IntegratorSpec:
         raise SceneError(f"{path}.atol", "an absolute tolerance >= 0 (dimensionless)", shown(table["atol"]))
     max_step = _quantity(table["max_step"], f"{path}.max_step", TIME, positive=True) if "max_step" in table else None
     max_steps = _integer(table["max_steps"], f"{path}.max_steps", 1) if "max_steps" in table else None
-    return IntegratorSpec(method, rtol, atol, max_step, max_steps)
+    formulation = _choice(table.get("formulation", "cowell"), f"{path}.formulation", FORMULATIONS)
+    return IntegratorSpec(method, rtol, atol, max_step, max_steps, formulation)
 
 
 def _parse_output(value: Any, duration_s: float) -> OutputSpec:
@@ -1342,6 +1350,8 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
         integrator["max_step"] = format_si(ig.max_step_s, TIME)
     if ig.max_steps is not None:
         integrator["max_steps"] = ig.max_steps
+    if ig.formulation != "cowell":
+        integrator["formulation"] = ig.formulation
     out["integrator"] = integrator
     if scene.stop is not None and scene.stop.altitude_m is not None:
         out["stop"] = {"altitude": format_si(scene.stop.altitude_m, LENGTH)}

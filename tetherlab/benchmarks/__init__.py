@@ -1,1 +1,2 @@
-"""Benchmark tables for ``make bench`` (each module returns rows; nothing here is asserted)."""
+"""Benchmark tables for ``make bench``: one module a benchmark, each returning rows (nothing here is
+asserted; heyoka, where compared, is imported inside functions only)."""

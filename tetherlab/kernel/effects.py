@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from .._jit import njit
 from ..forces import applied_force, central_gravity, uniform_gravity
+from ..forces import stiefel_moon  # Stiefel-Scheifele analytic Moon, code 30
 from ..forces import third_body, zonal  # gravity family, codes 10-13
 from ..forces import drag, electrodynamic  # codes 20-29
 from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_CNT, H_OFF_EFF
@@ -71,6 +72,11 @@ def body_force(p, t, body, x, y, z, vx, vy, vz, mass):
             fx += ax
             fy += ay
             fz += az
+        elif code == stiefel_moon.CODE:
+            ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
+            fx += mass * ax
+            fy += mass * ay
+            fz += mass * az
     return fx, fy, fz
 
 
@@ -119,6 +125,11 @@ def rod_force_density(p, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
             fx += ax
             fy += ay
             fz += az
+        elif code == stiefel_moon.CODE:
+            ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
+            fx += mass_per_xi * ax
+            fy += mass_per_xi * ay
+            fz += mass_per_xi * az
     return fx, fy, fz
 
 

@@ -30,10 +30,13 @@ H_FAIL_T = 17      # time of the failure
 H_FAIL_VAL = 18    # a value describing the failure (e.g. the strain)
 H_MIN_STRAIN = 19  # strain below which a rod counts as collapsed (FAIL_ROD_COLLAPSE)
 H_EV_STOP_R = 20   # stop when the root body's radius falls below this (m; 0 = no such stop)
+H_OFF_FORM = 21    # offset of the formulation's own parameters (DROMO: formulations/dromo.py); 0 = none
 H_SIZE = 24
 
 # -- formulation codes ---------------------------------------------------------------------------
 FORM_COWELL = 1
+FORM_DROMO_SIGMA = 2   # DROMO, ideal anomaly sigma independent (point mass)
+FORM_DROMO_TIME = 3    # DROMO elements of the root body, time independent (any scene)
 
 # -- tether models ---------------------------------------------------------------------------------
 MODEL_PAPER = 0    # published TMED equations (eq. 26 with the eq. 20 sign corrected)

@@ -1,0 +1,219 @@
+"""Stiefel-Scheifele speed benchmark: tetherlab's best method against heyoka at equal final error.
+
+For each target final-position error (1 m and 1 mm; issue 3, "Speed"), every tetherlab candidate
+(Cowell and DROMO with DOP853) and heyoka (taylor_adaptive, double precision) is run over a grid
+of tolerances; for each the loosest tolerance that reaches the target is timed (median of
+``repeats`` runs), and the fastest tetherlab candidate is compared with heyoka: ratio =
+tetherlab wall time / heyoka wall time (< 1: tetherlab is faster).
+
+Excluded from the timings, for both: compilation.  tetherlab: the numba kernels are loaded or
+compiled, and a warm-up run is made, before timing; the time covers the driver call (validation,
+the compiled step loop, and for DROMO the sigma grid pass and the time search).  heyoka: the
+``taylor_adaptive`` construction (where heyoka JIT-compiles its Taylor integrator) is excluded;
+the time covers ``propagate_until`` alone, after resetting time and state.
+
+The error is measured against references/stiefel/reference.json (binary128 heyoka and an
+independent decimal Taylor integrator, agreeing to 2e-22 m).  heyoka is imported inside
+:func:`heyoka_rows` only (it is an oracle, never a tetherlab dependency).
+"""
+
+from __future__ import annotations
+
+import json
+import statistics
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENE = ROOT / "studies" / "scenes" / "stiefel-scheifele.toml"
+REFERENCE = ROOT / "references" / "stiefel" / "reference.json"
+N_ORBITS = 50  # paper section 4.1: t_f = 50 revolutions
+TARGETS_M = (1.0, 1e-3)
+#: tolerance grid of the search (half decades); 1e-15 is near the double-precision floor
+TOLS = tuple(10.0 ** (-k / 2) for k in range(16, 31))
+#: heyoka double: its tolerance may go down to the double epsilon
+HEYOKA_TOLS = tuple(10.0 ** (-k / 2) for k in range(16, 32)) + (2.220446049250313e-16,)
+CANDIDATES = (("dromo", "dop853"), ("cowell", "dop853"))
+
+
+def reference_position_m() -> np.ndarray:
+    ref = json.loads(REFERENCE.read_text())
+    return np.array([float(x) for x in ref["final_state"]["position_km"]]) * 1e3
+
+
+def runner(formulation: str, method: str, tol: float):
+    """A zero-argument function running the scene to t_f once: returns (r_final_m, stats)."""
+    from ..formulations import dromo
+    from ..formulations.cowell import cowell_rhs
+    from ..integrators.driver import integrate
+    from ..kernel.layout import FORM_DROMO_SIGMA
+    from ..pipeline import prepare
+    from ..scene import load_scene
+
+    if formulation not in ("cowell", "dromo"):
+        raise ValueError(f"formulation: expected 'cowell' or 'dromo'; got {formulation!r}")
+    scene = load_scene(SCENE).replace(**{
+        "integrator.method": method, "integrator.rtol": tol, "integrator.atol": tol,
+        "integrator.formulation": formulation, "output.count": 2,
+    })  # fmt: skip
+    prep = prepare(scene)
+    h = prep.y0.size // 2
+    mu = prep.mu_m3_s2
+    L = float(np.linalg.norm(prep.y0[:3]))
+    if formulation == "cowell":
+        def run():
+            p = prep.model.fresh_params()
+            res = integrate(method, cowell_rhs, 0.0, prep.y0, prep.t_out, p, tol, prep.atol,
+                            max_steps=prep.max_steps, second_order=True)  # fmt: skip
+            return res.y[-1, :3] if res.status == 0 else np.full(3, np.nan), dict(res.stats)
+    else:
+        p0 = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
+
+        def run():
+            res = dromo.integrate_sigma(method, p0.copy(), prep.y0[:3], prep.y0[h : h + 3], prep.t_out,
+                                        tol, tol, mu, L, max_steps=prep.max_steps)  # fmt: skip
+            ok = res.status == 0 and len(res.t) == len(prep.t_out)
+            return res.y[-1, :3] if ok else np.full(3, np.nan), dict(res.stats)
+    return run
+
+
+def timed(run, repeats: int) -> tuple[float, np.ndarray, dict]:
+    run()  # warm-up: compilation / cache loading excluded
+    walls = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        r, stats = run()
+        walls.append(time.perf_counter() - t0)
+    return statistics.median(walls), r, stats
+
+
+def tetherlab_rows(tols=TOLS, candidates=CANDIDATES, repeats: int = 1) -> list[dict]:
+    """Error, steps and (median) wall time of each candidate at each tolerance."""
+    ref = reference_position_m()
+    rows = []
+    for form, method in candidates:
+        for tol in tols:
+            run_once = runner(form, method, tol)
+            wall, r, stats = timed(run_once, repeats)
+            rows.append({"who": f"tetherlab {form} {method}", "tol": tol, "run": run_once,
+                         "error_m": float(np.linalg.norm(r - ref)), "wall_s": wall,
+                         "steps": int(stats.get("n_accepted", 0))})  # fmt: skip
+    return rows
+
+
+def heyoka_rows(tols=HEYOKA_TOLS, repeats: int = 1) -> list[dict]:
+    """heyoka taylor_adaptive in double precision, the same equations as the reference builder."""
+    import heyoka as hy  # oracle only: imported here, never at tetherlab import time
+
+    x, y, z, vx, vy, vz = hy.make_vars("x", "y", "z", "vx", "vy", "vz")
+    # km, s; Stiefel & Scheifele (1971) sect. 23 constants (shared/references/stiefel-scheifele.md)
+    mu, j2, re, mum, rho, sig = 398601.0, 1.08265e-3, 6371.22, 4902.66, 384400.0, 2.665315780887e-6
+    c32 = float(np.sqrt(3.0) / 2.0)
+    r2 = x * x + y * y + z * z
+    ir3 = 1.0 / (r2 * hy.sqrt(r2))
+    q = z * z / r2
+    kj = -1.5 * j2 * mu * re * re * ir3 / r2
+    th = sig * hy.time
+    mx, my, mz = rho * hy.sin(th), -rho * c32 * hy.cos(th), -0.5 * rho * hy.cos(th)
+    dx, dy, dz = x - mx, y - my, z - mz
+    d2 = dx * dx + dy * dy + dz * dz
+    id3 = 1.0 / (d2 * hy.sqrt(d2))
+    irho3 = 1.0 / rho**3
+    sys_ = [(x, vx), (y, vy), (z, vz),
+            (vx, -mu * x * ir3 + kj * x * (1.0 - 5.0 * q) - mum * (dx * id3 + mx * irho3)),
+            (vy, -mu * y * ir3 + kj * y * (1.0 - 5.0 * q) - mum * (dy * id3 + my * irho3)),
+            (vz, -mu * z * ir3 + kj * z * (3.0 - 5.0 * q) - mum * (dz * id3 + mz * irho3))]  # fmt: skip
+    x0 = np.array([0.0, -5888.9727, -3400.0, 10.691338, 0.0, 0.0])  # paper eqs. 50-51
+    tf = 288.12768941 * 86400.0
+    ref = reference_position_m()
+    rows = []
+    for tol in tols:
+        ta = hy.taylor_adaptive(sys_, x0.copy(), tol=tol)  # construction (JIT) not timed
+
+        def run_once(ta=ta):
+            ta.time = 0.0
+            ta.state[:] = x0
+            out = ta.propagate_until(tf)
+            return ta.state[:3] * 1e3, {"n_accepted": int(out[3])}
+
+        wall, r, stats = timed(run_once, repeats)
+        rows.append({"who": "heyoka double", "tol": tol, "run": run_once,
+                     "error_m": float(np.linalg.norm(r - ref)), "wall_s": wall,
+                     "steps": stats["n_accepted"]})  # fmt: skip
+    return rows
+
+
+def _loosest(rows: list[dict], target: float) -> dict | None:
+    ok = [r for r in rows if r["error_m"] <= target]
+    return max(ok, key=lambda r: r["tol"]) if ok else None
+
+
+def _round_robin(runs, repeats: int) -> list[float]:
+    """Median wall time of each run, timed alternately so a changing machine load (2 shared
+    cores) hits every contender alike."""
+    walls = [[] for _ in runs]
+    for _ in range(repeats):
+        for k, f in enumerate(runs):
+            t0 = time.perf_counter()
+            f()
+            walls[k].append(time.perf_counter() - t0)
+    return [statistics.median(w) for w in walls]
+
+
+def run(repeats: int = 9) -> list[dict]:
+    """Rows: per target, the best tetherlab method and heyoka, with the wall-time ratio.
+
+    1. every candidate at every tolerance once (error; a rough time); 2. per target, the loosest
+    tolerance of each candidate reaching it; 3. those runs and heyoka's timed round-robin
+    (median of ``repeats``); the fastest tetherlab candidate is reported against heyoka.
+    """
+    tl = tetherlab_rows()
+    hk = heyoka_rows()
+    out = []
+    for target in TARGETS_M:
+        picks = [_loosest([r for r in tl if r["who"] == who], target) for who in sorted({r["who"] for r in tl})]
+        picks = [p for p in picks if p is not None]
+        hpick = _loosest(hk, target)
+        contenders = picks + ([hpick] if hpick else [])
+        walls = _round_robin([c["run"] for c in contenders], repeats)
+        tw = walls[: len(picks)]
+        best = picks[int(np.argmin(tw))] if picks else None
+        best_wall = min(tw) if picks else None
+        h_wall = walls[-1] if hpick else None
+        out.append({
+            "target_error_m": target,
+            "tetherlab_method": best["who"] if best else None,
+            "tetherlab_tol": best["tol"] if best else None,
+            "tetherlab_error_m": best["error_m"] if best else None,
+            "tetherlab_wall_s": best_wall,
+            "tetherlab_steps": best["steps"] if best else None,
+            "heyoka_tol": hpick["tol"] if hpick else None,
+            "heyoka_error_m": hpick["error_m"] if hpick else None,
+            "heyoka_wall_s": h_wall,
+            "heyoka_steps": hpick["steps"] if hpick else None,
+            "ratio_tetherlab_over_heyoka": (best_wall / h_wall) if best and hpick else None,
+            "others": {p["who"]: {"tol": p["tol"], "error_m": p["error_m"], "wall_s": w}
+                       for p, w in zip(picks, tw)},
+        })  # fmt: skip
+    return out
+
+
+def format_table(rows: list[dict]) -> str:
+    head = "| target | tetherlab method | tol | error [m] | wall [ms] | heyoka tol | heyoka error [m] | heyoka wall [ms] | ratio |"
+    lines = [head, "|" + "---|" * 9]
+    for r in rows:
+        def f(v, fmt):
+            return "n/a" if v is None else format(v, fmt)
+        lines.append(
+            f"| {r['target_error_m']:g} m | {r['tetherlab_method']} | {f(r['tetherlab_tol'], '.1e')} | "
+            f"{f(r['tetherlab_error_m'], '.3g')} | {f(r['tetherlab_wall_s'] and r['tetherlab_wall_s'] * 1e3, '.2f')} | "
+            f"{f(r['heyoka_tol'], '.1e')} | {f(r['heyoka_error_m'], '.3g')} | "
+            f"{f(r['heyoka_wall_s'] and r['heyoka_wall_s'] * 1e3, '.2f')} | {f(r['ratio_tetherlab_over_heyoka'], '.2f')} |"
+        )
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    print(format_table(run()))

@@ -1,0 +1,524 @@
+"""DROMO: the orbit in ideal-frame elements (Pelaez, Hedo & Rodriguez de Andres, CMDA 97, 2007).
+
+Equations, conventions, derivation and checks: ``docs/dromo.md`` (built on the checked sheet
+``shared/references/dromo.md``; its section numbers are cited as "sheet s5" etc.).
+
+Non-dimensional units: length L = |r0| (the initial radius of the root body), time
+T = sqrt(L^3/mu), so mu = 1.  Elements (sheet s1): q1, q2 = components of the eccentricity vector
+on the ideal axes x, y; q3 = 1/h; eta1..eta4 = Euler parameters of the ideal frame (eta4 scalar).
+Central gravity -mu r/r^3 is handled analytically; everything else the scene names (effects, and
+for a tether the joint reactions) enters as the perturbing acceleration a_p.
+
+Two forms, both compiled cfuncs with the integrators' RHS_SIG:
+
+* :func:`dromo_sigma_rhs` -- a point mass, independent variable the ideal anomaly sigma,
+  state z = [tau, q1, q2, q3, eta1, eta2, eta3, eta4] with tau = t/T (sheet s5, s6(a));
+* :func:`dromo_time_rhs` -- any scene, independent variable t (s): the root body's orbit in DROMO
+  elements with sigma as a state, the rods' d_i, d_i' exactly as in Cowell,
+  state y = [sigma, q1, q2, q3, eta1..eta4, d_1..d_N, d_1'..d_N'].
+
+Output at physical times with the sigma form (:func:`integrate_sigma`): sigma is integrated on a
+coarse grid (8 points a revolution, dense output) past the last requested time; each requested
+t_k is bracketed between two grid states and t(sigma) = t_k is solved by a safeguarded Newton
+iteration whose function evaluations are short integrations from the bracketing grid state
+(dt/dsigma = T/(q3^3 s^2) is the Newton derivative).  Docs/dromo.md section 5 says why.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import carray
+
+from .._jit import njit, rhs_cfunc
+from ..kernel.effects import body_force
+from ..kernel.layout import (
+    FORM_DROMO_SIGMA,
+    FORM_DROMO_TIME,
+    H_FORM,
+    H_LEN,
+    H_OFF_FORM,
+    H_ROOT_M,
+)
+from ..tether.chain import accelerations
+
+# Formulation block (at p[H_OFF_FORM]): mu, L, T, Cowell state length, DROMO state length;
+# a scratch buffer (q, q', acc of the Cowell coordinates) starts at FP_BUF.
+FP_MU, FP_L, FP_T, FP_NCOW, FP_NSTATE = 0, 1, 2, 3, 4
+FP_BUF = 8
+N_EL = 7  # q1 q2 q3 eta1 eta2 eta3 eta4
+TWO_PI = 2.0 * math.pi
+
+#: Grid points per revolution of sigma in the sigma form's first pass.  Each grid point inside a
+#: step costs DOP853 three extra stages (dense output), so few points keep the overhead small
+#: (8 a revolution: ~4 % at 50 steps a revolution); the bracket width does not limit accuracy.
+GRID_PER_REV = 8
+
+
+# ------------------------------------------------------------------------------------------------
+# compiled kernels
+# ------------------------------------------------------------------------------------------------
+@njit(cache=True)
+def geometry(sigma, y):
+    """s, kappa and the orbital-frame unit vectors i, j, k from (sigma, y[1:8]) (sheet s1, s2)."""
+    q1 = y[1]
+    q2 = y[2]
+    e1 = y[4]
+    e2 = y[5]
+    e3 = y[6]
+    e4 = y[7]
+    c = math.cos(sigma)
+    sn = math.sin(sigma)
+    s = 1.0 + q1 * c + q2 * sn
+    kap = q1 * sn - q2 * c
+    # ideal axes x, y and normal k: columns of R(eta), the convention of sheet s1
+    xx = 1.0 - 2.0 * (e2 * e2 + e3 * e3)
+    xy = 2.0 * (e1 * e2 + e3 * e4)
+    xz = 2.0 * (e1 * e3 - e2 * e4)
+    yx = 2.0 * (e1 * e2 - e3 * e4)
+    yy = 1.0 - 2.0 * (e1 * e1 + e3 * e3)
+    yz = 2.0 * (e2 * e3 + e1 * e4)
+    kx = 2.0 * (e1 * e3 + e2 * e4)
+    ky = 2.0 * (e2 * e3 - e1 * e4)
+    kz = 1.0 - 2.0 * (e1 * e1 + e2 * e2)
+    ix = c * xx + sn * yx
+    iy = c * xy + sn * yy
+    iz = c * xz + sn * yz
+    jx = -sn * xx + c * yx
+    jy = -sn * xy + c * yy
+    jz = -sn * xz + c * yz
+    return c, sn, s, kap, ix, iy, iz, jx, jy, jz, kx, ky, kz
+
+
+@njit(cache=True)
+def sigma_rates(c, sn, y, fr, ft, fn, dy):
+    """d/dsigma of [tau, q1, q2, q3, eta1..eta4] into dy[0:8], for the non-dimensional
+    perturbation (fr, ft, fn) in the orbital frame (sheet s5; docs/dromo.md section 3);
+    c, sn = cos sigma, sin sigma."""
+    q1 = y[1]
+    q2 = y[2]
+    q3 = y[3]
+    e1 = y[4]
+    e2 = y[5]
+    e3 = y[6]
+    e4 = y[7]
+    s = 1.0 + q1 * c + q2 * sn
+    q3s = q3 * q3 * q3 * s * s
+    den = q3s * q3 * s  # q3^4 s^3
+    ax = fr / den
+    ay = ft / den
+    az = fn / den
+    dy[0] = 1.0 / q3s
+    dy[1] = s * sn * ax + (q1 + (1.0 + s) * c) * ay
+    dy[2] = -s * c * ax + (q2 + (1.0 + s) * sn) * ay
+    dy[3] = -q3 * ay
+    h = 0.5 * az
+    dy[4] = h * (e4 * c - e3 * sn)
+    dy[5] = h * (e3 * c + e4 * sn)
+    dy[6] = h * (-e2 * c + e1 * sn)
+    dy[7] = h * (-e1 * c - e2 * sn)
+
+
+@njit(cache=True)
+def root_state(sigma, y, L, T):
+    """Inertial position (m) and velocity (m/s) of the orbit, and the frame (sheet s7)."""
+    c, sn, s, kap, ix, iy, iz, jx, jy, jz, kx, ky, kz = geometry(sigma, y)
+    q3 = y[3]
+    rn = L / (q3 * q3 * s)
+    vr = (L / T) * q3 * kap
+    vt = (L / T) * q3 * s
+    return (rn * ix, rn * iy, rn * iz, vr * ix + vt * jx, vr * iy + vt * jy, vr * iz + vt * jz,
+            ix, iy, iz, jx, jy, jz, kx, ky, kz, c, sn)  # fmt: skip
+
+
+@njit(cache=True)
+def _perturbation_rates(c, sn, y, ax_, ay_, az_, rx, ry, rz, ix, iy, iz, jx, jy, jz, kx, ky, kz,
+                        mu, L, dy):  # fmt: skip
+    """Subtract central gravity from the total acceleration (SI), project, scale, rates in dy."""
+    r2 = rx * rx + ry * ry + rz * rz
+    g = mu / (r2 * math.sqrt(r2))
+    px = ax_ + g * rx
+    py = ay_ + g * ry
+    pz = az_ + g * rz
+    scale = L * L / mu  # acceleration unit mu/L^2
+    fr = (px * ix + py * iy + pz * iz) * scale
+    ft = (px * jx + py * jy + pz * jz) * scale
+    fn = (px * kx + py * ky + pz * kz) * scale
+    sigma_rates(c, sn, y, fr, ft, fn, dy)
+
+
+@rhs_cfunc
+def dromo_sigma_rhs(sigma, y_ptr, dy_ptr, p_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    y = carray(y_ptr, (8,))
+    dy = carray(dy_ptr, (8,))
+    off = int(p[H_OFF_FORM])
+    mu = p[off + FP_MU]
+    L = p[off + FP_L]
+    T = p[off + FP_T]
+    rx, ry, rz, vx, vy, vz, ix, iy, iz, jx, jy, jz, kx, ky, kz, c, sn = root_state(sigma, y, L, T)
+    m0 = p[H_ROOT_M]
+    fx, fy, fz = body_force(p, T * y[0], 0, rx, ry, rz, vx, vy, vz, m0)
+    _perturbation_rates(c, sn, y, fx / m0, fy / m0, fz / m0, rx, ry, rz, ix, iy, iz, jx, jy, jz,
+                        kx, ky, kz, mu, L, dy)  # fmt: skip
+    return 0
+
+
+@rhs_cfunc
+def dromo_time_rhs(t, y_ptr, dy_ptr, p_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    off = int(p[H_OFF_FORM])
+    mu = p[off + FP_MU]
+    L = p[off + FP_L]
+    T = p[off + FP_T]
+    h = int(p[off + FP_NCOW]) // 2  # 3 (1 + N)
+    n = int(p[off + FP_NSTATE])  # 8 + 2 (h - 3)
+    y = carray(y_ptr, (n,))
+    dy = carray(dy_ptr, (n,))
+    nd = h - 3
+    b = off + FP_BUF
+    q = p[b : b + h]
+    qd = p[b + h : b + 2 * h]
+    acc = p[b + 2 * h : b + 3 * h]
+    sigma = y[0]
+    rx, ry, rz, vx, vy, vz, ix, iy, iz, jx, jy, jz, kx, ky, kz, c, sn = root_state(sigma, y, L, T)
+    q[0] = rx
+    q[1] = ry
+    q[2] = rz
+    qd[0] = vx
+    qd[1] = vy
+    qd[2] = vz
+    for i in range(nd):
+        q[3 + i] = y[8 + i]
+        qd[3 + i] = y[8 + nd + i]
+    status = accelerations(t, q, qd, p, acc)
+    if status != 0:
+        return status
+    _perturbation_rates(c, sn, y, acc[0], acc[1], acc[2], rx, ry, rz, ix, iy, iz, jx, jy, jz,
+                        kx, ky, kz, mu, L, dy)  # fmt: skip
+    # dsigma/dt = h/r^2 = q3^3 s^2 / T = 1 / (T dtau/dsigma); element rates by the chain rule
+    dsig_dt = 1.0 / (T * dy[0])
+    dy[0] = dsig_dt
+    for i in range(1, 8):
+        dy[i] *= dsig_dt
+    for i in range(nd):
+        dy[8 + i] = y[8 + nd + i]
+        dy[8 + nd + i] = acc[3 + i]
+    return 0
+
+
+# ------------------------------------------------------------------------------------------------
+# conversions (set-up and output; NumPy)
+# ------------------------------------------------------------------------------------------------
+def units(mu_m3_s2: float, length_m: float) -> tuple[float, float]:
+    """(L, T): the length unit and T = sqrt(L^3/mu) (sheet s3)."""
+    if not (mu_m3_s2 > 0 and length_m > 0):
+        raise ValueError(f"DROMO units: expected mu > 0 and L > 0; got mu={mu_m3_s2!r}, L={length_m!r}")
+    return float(length_m), math.sqrt(length_m**3 / mu_m3_s2)
+
+
+def quaternion_from_frame(R: np.ndarray) -> np.ndarray:
+    """Euler parameters (eta1, eta2, eta3, eta4) of the rotation whose columns are x, y, k
+    (the convention of sheet s1), by Shepperd's method: divide by the largest component, so no
+    geometry (retrograde equatorial included) divides by zero (sheet s4 step 4)."""
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    cand = (tr, R[0, 0], R[1, 1], R[2, 2])
+    k = int(np.argmax(cand))
+    if k == 0:
+        w = 0.5 * math.sqrt(1.0 + tr)
+        f = 0.25 / w
+        e = (f * (R[2, 1] - R[1, 2]), f * (R[0, 2] - R[2, 0]), f * (R[1, 0] - R[0, 1]), w)
+    elif k == 1:
+        x = 0.5 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        f = 0.25 / x
+        e = (x, f * (R[0, 1] + R[1, 0]), f * (R[0, 2] + R[2, 0]), f * (R[2, 1] - R[1, 2]))
+    elif k == 2:
+        y = 0.5 * math.sqrt(1.0 - R[0, 0] + R[1, 1] - R[2, 2])
+        f = 0.25 / y
+        e = (f * (R[0, 1] + R[1, 0]), y, f * (R[1, 2] + R[2, 1]), f * (R[0, 2] - R[2, 0]))
+    else:
+        z = 0.5 * math.sqrt(1.0 - R[0, 0] - R[1, 1] + R[2, 2])
+        f = 0.25 / z
+        e = (f * (R[0, 2] + R[2, 0]), f * (R[1, 2] + R[2, 1]), z, f * (R[1, 0] - R[0, 1]))
+    eta = np.array(e)
+    return eta / np.linalg.norm(eta)
+
+
+def frame_from_quaternion(eta) -> np.ndarray:
+    """R = [x y k] (columns) from the Euler parameters (sheet s1)."""
+    e1, e2, e3, e4 = (float(v) for v in eta)
+    return np.array(
+        [
+            [1 - 2 * (e2 * e2 + e3 * e3), 2 * (e1 * e2 - e3 * e4), 2 * (e1 * e3 + e2 * e4)],
+            [2 * (e1 * e2 + e3 * e4), 1 - 2 * (e1 * e1 + e3 * e3), 2 * (e2 * e3 - e1 * e4)],
+            [2 * (e1 * e3 - e2 * e4), 2 * (e2 * e3 + e1 * e4), 1 - 2 * (e1 * e1 + e2 * e2)],
+        ]
+    )
+
+
+def cartesian_to_dromo(r_m, v_m_s, mu_m3_s2: float, length_m: float, sigma0: float = 0.0) -> np.ndarray:
+    """DROMO elements [q1, q2, q3, eta1..eta4] of (r, v) at ideal anomaly ``sigma0``.
+
+    ``sigma0`` fixes the initial ideal frame (sheet s4 step 2); the default 0 puts it on the
+    orbital frame, defined for every eccentricity (the perifocal choice sigma0 = f0 is not
+    defined for e = 0).  Needs h != 0 (sheet s8).
+    """
+    L, T = units(mu_m3_s2, length_m)
+    r = np.asarray(r_m, float) / L
+    v = np.asarray(v_m_s, float) / (L / T)
+    hv = np.cross(r, v)
+    h = math.sqrt(float(hv @ hv))
+    rr = math.sqrt(float(r @ r))
+    if not (h > 0.0 and rr > 0.0):
+        raise ValueError(f"DROMO needs a non-zero angular momentum and radius; got |h|={h!r}, |r|={rr!r} (units L, T)")
+    i = r / rr
+    k = hv / h
+    j = np.cross(k, i)
+    e = np.cross(v, hv) - i
+    c, s = math.cos(sigma0), math.sin(sigma0)
+    x = c * i - s * j
+    y = s * i + c * j
+    R = np.column_stack([x, y, k])
+    return np.concatenate([[e @ x, e @ y, 1.0 / h], quaternion_from_frame(R)])
+
+
+def dromo_to_cartesian(sigma: float, elements, mu_m3_s2: float, length_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """(r in m, v in m/s) from the ideal anomaly and the DROMO elements (sheet s7)."""
+    L, T = units(mu_m3_s2, length_m)
+    q1, q2, q3 = (float(v) for v in elements[:3])
+    R = frame_from_quaternion(elements[3:7])
+    x, y = R[:, 0], R[:, 1]
+    c, sn = math.cos(sigma), math.sin(sigma)
+    i = c * x + sn * y
+    j = -sn * x + c * y
+    s = 1.0 + q1 * c + q2 * sn
+    kap = q1 * sn - q2 * c
+    r = (L / (q3 * q3 * s)) * i
+    v = (L / T) * (q3 * kap * i + q3 * s * j)
+    return r, v
+
+
+def dt_dsigma(sigma: float, z, T: float) -> float:
+    """dt/dsigma = T r^2/h = T / (q3^3 s^2) (s), the Newton derivative of the time search."""
+    s = 1.0 + z[1] * math.cos(sigma) + z[2] * math.sin(sigma)
+    return T / (z[3] ** 3 * s * s)
+
+
+def predicted_sigma(elements, sigma0: float, t_s: float, T: float) -> float:
+    """Ideal anomaly at time ``t_s`` (from t = 0) on the unperturbed osculating ellipse (Kepler's
+    equation).  Only sizes the first integration pass; never used as a result."""
+    q1, q2, q3 = elements[:3]
+    e = math.hypot(q1, q2)
+    if not e < 1.0:
+        raise ValueError(
+            f"the sigma form of DROMO needs an elliptic orbit to schedule its output (e = {e:.6g}); "
+            "use formulation 'dromo-time'"
+        )
+    beta = math.atan2(q2, q1)  # f = sigma - beta (sheet s7)
+    f0 = sigma0 - beta
+    n = q3**3 * (1 - e * e) ** 1.5 / T  # mean motion, rad/s (sheet s6, n = q3^3 w^3 per T)
+    E0 = 2 * math.atan2(math.sqrt(1 - e) * math.sin(f0 / 2), math.sqrt(1 + e) * math.cos(f0 / 2))
+    M = E0 - e * math.sin(E0) + n * t_s
+    revs = math.floor((M + math.pi) / TWO_PI)
+    Mw = M - TWO_PI * revs  # in [-pi, pi)
+    E = Mw + e * math.sin(Mw) if e < 0.8 else math.copysign(math.pi, Mw)  # Newton converges from pi
+    for _ in range(60):
+        dE = (E - e * math.sin(E) - Mw) / (1 - e * math.cos(E))
+        E -= dE
+        if abs(dE) < 1e-15:
+            break
+    f = 2 * math.atan2(math.sqrt(1 + e) * math.sin(E / 2), math.sqrt(1 - e) * math.cos(E / 2))
+    f0w = f0 - TWO_PI * math.floor((f0 + math.pi) / TWO_PI)
+    return sigma0 + (f + TWO_PI * revs) - f0w
+
+
+# ------------------------------------------------------------------------------------------------
+# parameter block
+# ------------------------------------------------------------------------------------------------
+def attach(p: np.ndarray, form: int, mu_m3_s2: float, length_m: float, n_cowell: int) -> np.ndarray:
+    """A copy of the model's parameter block with the DROMO block appended (header H_OFF_FORM)."""
+    if form not in (FORM_DROMO_SIGMA, FORM_DROMO_TIME):
+        raise ValueError(f"form: expected FORM_DROMO_SIGMA or FORM_DROMO_TIME; got {form!r}")
+    L, T = units(mu_m3_s2, length_m)
+    h = n_cowell // 2
+    n_state = 8 if form == FORM_DROMO_SIGMA else 8 + 2 * (h - 3)
+    off = p.size
+    block = np.zeros(FP_BUF + 3 * h)
+    block[FP_MU] = mu_m3_s2
+    block[FP_L] = L
+    block[FP_T] = T
+    block[FP_NCOW] = n_cowell
+    block[FP_NSTATE] = n_state
+    out = np.concatenate([p, block])
+    out[H_LEN] = out.size
+    out[H_OFF_FORM] = off
+    out[H_FORM] = form
+    return out
+
+
+def time_state(y_cowell: np.ndarray, mu_m3_s2: float, length_m: float, sigma0: float = 0.0) -> np.ndarray:
+    """Time-form state [sigma, elements, d, d'] from a Cowell state [r0, d, v0, d']."""
+    h = y_cowell.size // 2
+    el = cartesian_to_dromo(y_cowell[:3], y_cowell[h : h + 3], mu_m3_s2, length_m, sigma0)
+    return np.concatenate([[sigma0], el, y_cowell[3:h], y_cowell[h + 3 :]])
+
+
+def cowell_state(y_time: np.ndarray, mu_m3_s2: float, length_m: float) -> np.ndarray:
+    """Cowell state [r0, d, v0, d'] from a time-form state [sigma, elements, d, d']."""
+    nd = (y_time.size - 8) // 2
+    r, v = dromo_to_cartesian(y_time[0], y_time[1:8], mu_m3_s2, length_m)
+    return np.concatenate([r, y_time[8 : 8 + nd], v, y_time[8 + nd :]])
+
+
+# ------------------------------------------------------------------------------------------------
+# integration
+# ------------------------------------------------------------------------------------------------
+_STAT_KEYS = ("n_accepted", "n_rejected", "n_rhs", "n_jac", "n_lu")
+
+
+def _add_stats(total: dict, part: dict) -> None:
+    for k in _STAT_KEYS:
+        total[k] = total.get(k, 0) + int(part.get(k, 0))
+
+
+def integrate_time(method, p_ext, y0_cowell, t_out, rtol, atol_cowell, mu, length_m, h_max=0.0,
+                   max_steps=10**7, progress=None):  # fmt: skip
+    """Time form: integrate and return an IntegrationResult whose ``y`` rows are Cowell states."""
+    from ..integrators.driver import IntegrationResult, integrate
+
+    z0 = time_state(np.asarray(y0_cowell, float), mu, length_m)
+    h = y0_cowell.size // 2
+    a = np.asarray(atol_cowell, float)
+    # elements and sigma are O(1) non-dimensional: atol in their own units = the scene's atol,
+    # which is atol_cowell[0]/L (the root position scale is the reference radius)
+    a_el = a[0] / length_m
+    atol = np.concatenate([np.full(8, a_el), a[3:h], a[h + 3 :]])
+    res = integrate(method, dromo_time_rhs, 0.0, z0, t_out, p_ext, rtol, atol, h_max=h_max,
+                    max_steps=max_steps, progress=progress)  # fmt: skip
+    Y = np.array([cowell_state(z, mu, length_m) for z in res.y]).reshape(len(res.t), y0_cowell.size)
+    return IntegrationResult(t=res.t, y=Y, status=res.status, message=res.message, t_end=res.t_end,
+                             y_end=cowell_state(res.y_end, mu, length_m), stats=dict(res.stats))  # fmt: skip
+
+
+def integrate_sigma(method, p_ext, r0_m, v0_m_s, t_out, rtol, atol, mu, length_m, sigma0=0.0,
+                    max_steps=10**7, progress=None, grid_per_rev=GRID_PER_REV):  # fmt: skip
+    """Sigma form for a point mass, with the state reported at the physical times ``t_out`` (s).
+
+    Returns an IntegrationResult with Cartesian rows [r, v] (m, m/s) at ``t_out``.  ``atol`` is in
+    the units of the non-dimensional state (a scalar).  See the module docstring for the method.
+    """
+    from ..integrators.driver import IntegrationResult, integrate
+
+    L, T = units(mu, length_m)
+    tt = np.asarray(t_out, float)
+    if tt.ndim != 1 or tt.size == 0 or np.any(np.diff(tt) < 0) or tt[0] < 0:
+        raise ValueError(f"t_out: expected non-decreasing times >= 0 s; got {tt!r}")
+    el0 = cartesian_to_dromo(r0_m, v0_m_s, mu, length_m, sigma0)
+    z0 = np.concatenate([[0.0], el0])
+    atol_v = np.full(8, float(atol))
+    t_last = float(tt[-1])
+    dsig = TWO_PI / grid_per_rev
+    sig_end = predicted_sigma(el0, sigma0, t_last, T) + 0.25 * TWO_PI
+    stats: dict = {}
+    wall = 0.0
+
+    # pass 1: sigma grid until it passes t_last (extended one revolution at a time if the
+    # perturbation made the prediction short)
+    sig_grid = [np.array([sigma0])]
+    z_grid = [z0[None, :]]
+    start_sig, start_z = sigma0, z0
+    status, message, budget = 0, "", max_steps
+    while True:
+        n = max(1, int(math.ceil((sig_end - start_sig) / dsig)))
+        grid = start_sig + dsig * np.arange(1, n + 1)
+        res = integrate(method, dromo_sigma_rhs, start_sig, start_z, grid, p_ext, rtol, atol_v,
+                        max_steps=budget, progress=None)  # fmt: skip
+        _add_stats(stats, res.stats)
+        wall += res.stats.get("wall_s", 0.0)
+        budget -= res.stats.get("n_accepted", 0)
+        sig_grid.append(res.t)
+        z_grid.append(res.y)
+        if progress is not None and len(res.t):
+            progress(float(res.y[-1, 0] * T))
+        if res.status != 0:
+            status, message = res.status, res.message
+            break
+        if res.y[-1, 0] * T >= t_last or budget <= 0:
+            break
+        start_sig, start_z = float(res.t[-1]), res.y[-1].copy()
+        sig_end = start_sig + TWO_PI
+    S = np.concatenate(sig_grid)
+    Z = np.concatenate(z_grid)
+    tg = Z[:, 0] * T
+    if not np.all(np.diff(tg) > 0):
+        status = status or 4
+        message = message or "time did not increase along sigma (h -> 0 or s <= 0: DROMO singular)"
+
+    # pass 2: each requested time by Newton on t(sigma) from its bracketing grid state
+    rows = []
+    n_newton = 0
+    search: dict = {}  # cost of the time searches, reported apart from the sigma pass
+    for tk in tt:
+        j = int(np.searchsorted(tg, tk, side="right")) - 1
+        if j < 0 or j >= len(S) - 1 and tk > tg[-1]:
+            break
+        if tk == tg[j] or j == len(S) - 1:
+            sig_k, z_k, g = float(S[j]), Z[j], tk - tg[j]
+        else:
+            sig_k, z_k, g, nn, st = _solve_time(method, p_ext, float(S[j]), Z[j], float(S[j + 1] - S[j]),
+                                                tk, T, rtol, atol_v, search)  # fmt: skip
+            n_newton += nn
+            if st != 0:
+                status, message = st, f"time search near t={tk!r} s failed (status {st})"
+                break
+        r, v = dromo_to_cartesian(sig_k, z_k[1:8], mu, length_m)
+        rows.append(np.concatenate([r + v * g, v]))  # first-order step over the residual g (~ulp of t)
+    Y = np.array(rows).reshape(len(rows), 6)
+    t_done = tt[: len(rows)].copy()
+    stats["wall_s"] = wall
+    stats["newton_integrations"] = n_newton
+    for k in _STAT_KEYS:
+        stats["search_" + k] = search.get(k, 0)
+    stats["sigma_end"] = float(S[-1])
+    z_end = Z[-1]
+    r_end, v_end = dromo_to_cartesian(float(S[-1]), z_end[1:8], mu, length_m)
+    if status == 0:
+        message = f"reached t={t_done[-1]!r} (sigma form, sigma_end={S[-1]:.6f})"
+    return IntegrationResult(t=t_done, y=Y, status=int(status), message=message,
+                             t_end=float(t_done[-1]) if len(t_done) else 0.0,
+                             y_end=np.concatenate([r_end, v_end]), stats=stats)  # fmt: skip
+
+
+def _solve_time(method, p_ext, sig_a, z_a, width, tk, T, rtol, atol_v, stats):
+    """sigma in (sig_a, sig_a + width] with t(sigma) = tk: safeguarded Newton whose evaluations
+    integrate from the grid state (sig_a, z_a).  Returns (sigma, z, tk - t(sigma), evals, status)."""
+    from ..integrators.driver import integrate
+
+    lo, hi = 0.0, width
+    d = (tk - z_a[0] * T) / dt_dsigma(sig_a, z_a, T)
+    if not lo < d < hi:
+        d = 0.5 * (lo + hi)
+    tol = 4.0 * np.finfo(float).eps * max(abs(tk), T)
+    for it in range(1, 60):
+        res = integrate(method, dromo_sigma_rhs, sig_a, z_a, np.array([sig_a + d]), p_ext, rtol,
+                        atol_v)  # fmt: skip
+        _add_stats(stats, res.stats)
+        if res.status != 0:
+            return sig_a + d, z_a, 0.0, it, res.status
+        z = res.y[-1]
+        sig = sig_a + d
+        g = z[0] * T - tk
+        if abs(g) <= tol:
+            return sig, z, -g, it, 0
+        if g < 0:
+            lo = d
+        else:
+            hi = d
+        dn = d - g / dt_dsigma(sig, z, T)
+        if not lo < dn < hi:
+            dn = 0.5 * (lo + hi)
+        if hi - lo <= 4.0 * np.finfo(float).eps * max(abs(sig), 1.0):
+            return sig, z, -g, it, 0
+        d = dn
+    return sig, z, -g, it, 0
