@@ -383,7 +383,7 @@ class StudyCase:
     set: dict[str, Any]
     grid: dict[str, list]
     quantities: list[str]
-    adjust: str | None = None  # "file.py:function" or "module:function": (scene, point) -> scene
+    adjust: str | None = None  # "file.py:function" or "module:function": (base, point) -> more changes
     description: str = ""
 
     def points(self) -> list[dict[str, Any]]:
@@ -399,10 +399,10 @@ class StudyCase:
         adjust = resolve(self.adjust, base_dir) if self.adjust else None
         scenes, points = [], self.points()
         for point in points:
-            scene = base.replace(**point) if point else base
-            if adjust is not None:
-                scene = adjust(scene, point)
-            scenes.append(scene)
+            # the hook's changes go into the same replace as the point's: a rod count and the
+            # per-rod angles it needs must change together to form a valid scene
+            changes = {**point, **(adjust(base, point) if adjust is not None else {})}
+            scenes.append(base.replace(**changes) if changes else base)
         return scenes, points
 
 
@@ -428,7 +428,7 @@ def load_study(path: str | Path) -> Study:
         scene = "scenes/vertical-equilibrium.toml"      # relative to the study file
         summary = "tetherlab.summaries:attachment_tension"
         quantities = ["root_tension_N"]                 # the summary keys the study is about
-        adjust = "convergence.py:first_lateral_shape"   # optional: (scene, point) -> scene
+        adjust = "convergence.py:first_lateral_shape"   # optional: (base, point) -> dict of changes
         [case.set]                                      # fixed changes, dotted keys
         duration = "0.05 orbits"
         [case.grid]                                     # every combination is one run
