@@ -1,0 +1,126 @@
+"""Rod-count convergence study: runs studies/convergence.toml as sweeps, writes OUTDIR/.
+
+    PYTHONPATH=. python studies/convergence.py OUTDIR [--max-rods N] [--scheduler tcp://...] [--workers N]
+
+For each case and quantity: the values against n, the Richardson estimate of the converged
+value and the observed order from the three finest successful points (tetherlab.richardson),
+|a_n - estimate| on a log-log figure, a CSV per case (every run, with its cost and any error)
+and a Markdown section (OUTDIR/convergence.md).  Runs are cached in OUTDIR/cache: an interrupted
+study resumes.  Failed runs are listed with their message, never dropped silently.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROD_KEY = "tethers.main.rods"
+
+
+def first_lateral_shape(base, point):
+    """Lay the rods on the first lateral mode of a string: rod i (of n) at angle
+    a cos(pi (i - 1/2) / n) from the local vertical, a = 0.1 rad.
+
+    The slope of w(s) = A sin(pi s / L) is proportional to cos(pi s / L); sampled at the rod
+    midpoints s_i = (i - 1/2) L / n it sums to zero over the rods, so the tip starts on the
+    vertical through the root and only the lateral mode (not the libration) is excited at
+    first order.
+    """
+    n = int(point[ROD_KEY])
+    a = 0.1
+    theta = [f"{a * math.cos(math.pi * (i + 0.5) / n)!r} rad" for i in range(n)]
+    return {"tethers.main.initial.theta": theta, "tethers.main.initial.phi": ["0 rad"] * n}
+
+
+def analyse(case, res):
+    """Rows of the convergence table for every quantity of one case."""
+    from tetherlab.richardson import richardson
+
+    ok = sorted((r for r in res.records if r.ok), key=lambda r: r.params[ROD_KEY])
+    out = []
+    for q in case.quantities:
+        ns = [r.params[ROD_KEY] for r in ok]
+        vals = [r.summary[q] for r in ok]
+        est = richardson(ns, vals) if len(ns) >= 3 else {"order": math.nan, "limit": math.nan,
+                                                          "error_estimate": math.nan}
+        out.append({"quantity": q, "ns": ns, "values": vals, **est,
+                    "wall_s": [r.summary.get("wall_s", math.nan) for r in ok]})
+    return out
+
+
+def figure(case, analysis, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    for a in analysis:
+        if not math.isfinite(a["limit"]):
+            continue
+        pts = [(n, abs(v - a["limit"])) for n, v in zip(a["ns"], a["values"]) if abs(v - a["limit"]) > 0]
+        if pts:
+            ax.loglog(*zip(*pts), "o-", label=f"{a['quantity']} (p = {a['order']:.2f})")
+    ax.set_xlabel("rods n")
+    ax.set_ylabel("|value - Richardson estimate|")
+    ax.set_title(case.id)
+    ax.grid(True, which="both", alpha=0.3)
+    if ax.lines:
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    from tetherlab.sweep import load_study, run_case
+
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("out", help="output directory")
+    ap.add_argument("--max-rods", type=int, help="largest rod count (default: [options] max_rods of the study)")
+    ap.add_argument("--scheduler", help="Dask scheduler address; default: local processes")
+    ap.add_argument("--workers", type=int)
+    ap.add_argument("--quiet", action="store_true")
+    args = ap.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    study = load_study(HERE / "convergence.toml")
+    max_rods = args.max_rods or int(study.options.get("max_rods", 64))
+    md = [f"## Rod-count convergence (n <= {max_rods})", "", study.description, "",
+          "Richardson estimate and observed order p from the three finest successful points "
+          "(tetherlab/richardson.py); 'NaN' when those points do not converge monotonically.", "",
+          "| case | quantity | n | values | estimate | p | error estimate of finest | wall per run (s) |",
+          "|---|---|---|---|---|---|---|---|"]
+    failures = []
+    table = []
+    for case in study.cases:
+        res = run_case(study, case, out, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet,
+                       filter_point=lambda p: p[ROD_KEY] <= max_rods)
+        analysis = analyse(case, res)
+        figure(case, analysis, out / f"convergence-{case.id}.png")
+        for r in res.failed:
+            failures.append(f"- {case.id}, {r.label}: `{r.error}`")
+        for a in analysis:
+            md.append(
+                f"| {case.id} | {a['quantity']} | {', '.join(map(str, a['ns']))} | "
+                f"{', '.join(f'{v:.10g}' for v in a['values'])} | {a['limit']:.10g} | {a['order']:.3g} | "
+                f"{a['error_estimate']:.3g} | {', '.join(f'{w:.3g}' for w in a['wall_s'])} |"
+            )
+            for n, v, w in zip(a["ns"], a["values"], a["wall_s"]):
+                table.append(f"{case.id},{a['quantity']},{n},{v!r},{a['limit']!r},{a['order']!r},{w!r}")
+        md += []
+    (out / "convergence.csv").write_text("case,quantity,rods,value,richardson_estimate,observed_order,wall_s\n"
+                                         + "\n".join(table) + "\n")
+    md += ["", "Figures: " + ", ".join(f"![{c.id}](convergence-{c.id}.png)" for c in study.cases), ""]
+    if failures:
+        md += ["Failed runs (kept in the per-case CSV with their message):", ""] + failures + [""]
+    (out / "convergence.md").write_text("\n".join(md))
+    print("\n".join(md))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

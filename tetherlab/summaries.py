@@ -1,0 +1,186 @@
+"""Summary functions for sweeps: run one scene, reduce it to a few floats.
+
+Each is a module-level function ``f(scene) -> dict[str, float]`` (picklable by name, so it can
+run in a worker process or on a Dask worker; see :mod:`tetherlab.sweep`).  Every summary also
+returns the run's cost (``wall_s`` integrator wall time, ``n_rhs``, ``n_steps``), so a study
+can report what its accuracy cost.  A failed run raises (``SimulationError``): the sweep records
+the message; summaries never turn a failure into numbers.
+
+Quantities (the first tether of the scene is "the tether"; its ends are the root body and the
+tip body):
+
+* :func:`attachment_tension`: force of the tether on each end body at t = 0 (joint reactions,
+  paper eq. 29-30), for static scenes (relative equilibrium along the local vertical).
+* :func:`libration_frequency`: in-plane libration angular frequency from the zero crossings of
+  theta(t) (:func:`tetherlab.diagnostics.zero_crossing_frequency`).
+* :func:`lateral_frequency`: first lateral (string) mode: zero crossings of the in-plane
+  distance of the middle node from the root-tip chord, mean removed.
+* :func:`final_state`: every body's final position, for work-precision errors.
+* :func:`invariants`: NaN check, angular momentum and energy drift in units of the tether's own
+  angular momentum and rotational energy, final positions (hard cases).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def _run(scene):
+    from .pipeline import simulate
+
+    return simulate(scene, progress=False)
+
+
+def _cost(res) -> dict[str, float]:
+    s = res.stats
+    return {
+        "wall_s": float(s.get("wall_s", math.nan)),
+        "n_rhs": float(s.get("n_rhs", math.nan)),
+        "n_steps": float(s.get("n_accepted", math.nan)),
+    }
+
+
+def _tether(scene):
+    if not scene.tethers:
+        raise ValueError(f"scene {scene.name!r} has no tether; this summary needs one")
+    return scene.tethers[0]
+
+
+def attachment_tension(scene) -> dict[str, float]:
+    """Tether force on the root and on the tip body at t = 0, and its drift over the run (N)."""
+    t = _tether(scene)
+    res = _run(scene)
+    ts = res.timeseries
+    root = ts[f"{t.name}.joint0.reaction_N"].to_numpy()
+    tip = ts[f"{t.name}.joint{t.rods}.reaction_N"].to_numpy()
+    return {
+        "root_tension_N": float(root[0]),
+        "tip_tension_N": float(tip[0]),
+        "root_tension_drift_N": float(np.max(np.abs(root - root[0]))),
+        **_cost(res),
+    }
+
+
+def libration_frequency(scene) -> dict[str, float]:
+    """In-plane libration angular frequency (rad/s) and period (s) from theta's zero crossings."""
+    from .diagnostics import zero_crossing_frequency
+
+    t = _tether(scene)
+    res = _run(scene)
+    d = res.diagnostics
+    w = zero_crossing_frequency(d["t_s"].to_numpy(), d[f"{t.name}.theta_rad"].to_numpy())
+    return {"libration_rad_s": w, "libration_period_s": 2 * math.pi / w, **_cost(res)}
+
+
+def lateral_offset_m(ts, tether_name: str, rods: int) -> np.ndarray:
+    """Signed in-plane distance (m) of the middle node from the root-tip chord, per output row.
+
+    The sign is that of (chord x offset) along the orbit normal, taken from the first row's
+    positions and velocities of the nodes' centroid (planar runs: the normal does not turn).
+    For an odd rod count the "middle" is the mean of the two central nodes.
+    """
+    def node(j):
+        return np.stack([ts[f"{tether_name}.node{j}.{a}_m"].to_numpy() for a in "xyz"], axis=1)
+
+    a, b = node(0), node(rods)
+    mid = node(rods // 2) if rods % 2 == 0 else 0.5 * (node(rods // 2) + node(rods // 2 + 1))
+    chord = b - a
+    chord /= np.linalg.norm(chord, axis=1, keepdims=True)
+    rel = mid - a
+    off = rel - np.sum(rel * chord, axis=1, keepdims=True) * chord
+    # orbit normal from the root's orbital motion over the first two rows
+    normal = np.cross(a[0], a[1] - a[0])
+    normal /= np.linalg.norm(normal)
+    return np.einsum("ij,j->i", np.cross(chord, off), normal)
+
+
+def lateral_frequency(scene) -> dict[str, float]:
+    """First lateral mode angular frequency (rad/s) from the middle node's offset to the chord."""
+    from .diagnostics import zero_crossing_frequency
+
+    t = _tether(scene)
+    if t.rods < 2:
+        raise ValueError(f"tethers.{t.name}.rods: a lateral mode needs at least 2 rods, got {t.rods}")
+    res = _run(scene)
+    ts = res.timeseries
+    off = lateral_offset_m(ts, t.name, t.rods)
+    w = zero_crossing_frequency(ts["t_s"].to_numpy(), off - off.mean())
+    return {"lateral_rad_s": w, "lateral_period_s": 2 * math.pi / w,
+            "lateral_amplitude_m": float(np.max(np.abs(off - off.mean()))), **_cost(res)}
+
+
+def _body_names(scene) -> list[str]:
+    return [b.name for b in scene.bodies]
+
+
+def final_state(scene) -> dict[str, float]:
+    """Final position (m) of every body: ``<body>.x_m`` ... and the run's cost."""
+    res = _run(scene)
+    ts = res.timeseries
+    out = {}
+    for name in _body_names(scene):
+        for a in "xyz":
+            col = f"{name}.{a}_m"
+            if col in ts:
+                out[col] = float(ts[col].iloc[-1])
+    out["t_end_s"] = float(ts["t_s"].iloc[-1])
+    return {**out, **_cost(res)}
+
+
+def own_angular_momentum_scale(scene) -> tuple[float, float]:
+    """(I * n, I * n^2): angular momentum (kg m^2/s) and energy (J) scales of the tether's own
+    rotation about the centre of mass at the orbit's mean motion n.
+
+    I is the moment of inertia of the straight system about its centre of mass: root mass at
+    s = 0, tip mass mf at s = L, tether mass mt uniform on [0, L]:
+    I = mf L^2 + mt L^2 / 3 - (mf L + mt L / 2)^2 / M, M = m0 + mf + mt (parallel axis theorem).
+    Errors of the total angular momentum about the Earth's centre are measured against this scale,
+    not against the orbital angular momentum, which is 10^6-10^8 times larger and would hide them.
+    """
+    t = _tether(scene)
+    m0 = scene.body(t.from_body).mass_kg
+    mf = scene.body(t.to_body).mass_kg
+    mt, L = t.mass_kg, t.length_m
+    M = m0 + mf + mt
+    inertia = mf * L**2 + mt * L**2 / 3 - (mf * L + mt * L / 2) ** 2 / M
+    a = _semi_major_axis(scene)
+    n = math.sqrt(scene.central_body.mu_m3_s2 / a**3)
+    return inertia * n, inertia * n * n
+
+
+def _semi_major_axis(scene) -> float:
+    r, v = scene.reference_state()
+    mu = scene.central_body.mu_m3_s2
+    energy = 0.5 * float(v @ v) - mu / float(np.linalg.norm(r))
+    return -mu / (2 * energy)
+
+
+def invariants(scene) -> dict[str, float]:
+    """Hard-case checks: finite outputs, invariant drifts in the tether's own units, final state.
+
+    ``angmom_error_own`` = max_t |H(t) - H(0)| / (I n); ``energy_error_own`` = max_t |E(t) -
+    E(0)| / (I n^2) (meaningful for the "energy" model, which conserves E; docs/model.md);
+    ``nonfinite`` = number of non-finite values in the outputs (must be 0).
+    """
+    res = _run(scene)
+    ts, d = res.timeseries, res.diagnostics
+    h_scale, e_scale = own_angular_momentum_scale(scene)
+    H = d[[f"angmom_{a}_kg_m2_s" for a in "xyz"]].to_numpy()
+    E = d["energy_J"].to_numpy()
+    t = _tether(scene)
+    strain = np.stack([ts[f"{t.name}.rod{i + 1}.strain"].to_numpy() for i in range(t.rods)], axis=1)
+    out = {
+        "nonfinite": float(np.count_nonzero(~np.isfinite(ts.to_numpy())) + np.count_nonzero(~np.isfinite(d.to_numpy()))),
+        "angmom_error_own": float(np.max(np.linalg.norm(H - H[0], axis=1)) / h_scale),
+        "energy_error_own": float(np.max(np.abs(E - E[0])) / e_scale),
+        "strain_min": float(strain.min()),
+        "strain_max": float(strain.max()),
+    }
+    for name in _body_names(scene):
+        for a in "xyz":
+            col = f"{name}.{a}_m"
+            if col in ts:
+                out[col] = float(ts[col].iloc[-1])
+    return {**out, **_cost(res)}
