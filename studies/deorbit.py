@@ -183,7 +183,7 @@ def main(argv=None) -> int:
         "date": datetime.datetime.now().isoformat(timespec="seconds"),
         "versions": library_versions(),
         "sources": ["paper section 5", "docs/effects-electrodynamic.md", "studies/scenes/deorbit-ed*.toml"],
-        "stop": f"satellite altitude below {STOP_ALTITUDE_M:g} m (linear interpolation between outputs)",
+        "stop": f"satellite altitude at {STOP_ALTITUDE_M:g} m, located as a terminal event by the integrator",
     }
     (out / "deorbit_summary.json").write_text(json.dumps({"runs": rows, "gates": gates, "meta": meta}, indent=2, default=str))
     import pandas as pd

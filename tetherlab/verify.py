@@ -222,26 +222,71 @@ def _catenary_gates(outdir: Path) -> dict:
     }
 
 
-#: (title, study script in studies/, markdown it writes, function reading its gate values)
+def _stiefel_gates(outdir: Path) -> dict:
+    import pandas as pd
+
+    df = pd.read_csv(outdir / "stiefel_table.csv")
+    best = {who: float(g["final_position_error_m"].min()) for who, g in df.groupby("who")}
+    return {
+        "stiefel_cowell_best_error": min(v for k, v in best.items() if k.startswith("tetherlab cowell")),
+        "stiefel_dromo_best_error": min(v for k, v in best.items() if k.startswith("tetherlab dromo")),
+    }
+
+
+def _deorbit_gates(outdir: Path) -> dict:
+    runs = json.loads((outdir / "deorbit_summary.json").read_text())["runs"]
+    n1 = runs[0]
+    out = {"deorbit_n1_vs_paper": abs(n1["vs_paper_rel"]), "deorbit_n1_vs_closed_form": abs(n1["vs_closed_form_rel"])}
+    n4 = [r for r in runs if r.get("label", "").startswith("n=4")]
+    if n4:
+        out["deorbit_n4_vs_n1"] = abs(n4[0]["deorbit_days"] / n1["deorbit_days"] - 1.0)
+    return out
+
+
+def _hard_cases_gates(outdir: Path) -> dict:
+    md = (outdir / "hard_cases.md").read_text()
+    return {"hard_cases_failed": float(sum(1 for line in md.splitlines() if "| FAIL |" in line))}
+
+
+#: (title, study script in studies/, its arguments after OUTDIR, markdown it writes, gate reader)
 STUDIES = [
-    ("Catenary against Irvine's elastic catenary (paper section 4.2)", "catenary", "catenary.md", _catenary_gates),
+    ("Catenary against Irvine's elastic catenary (paper section 4.2)", "catenary", [], "catenary.md", _catenary_gates),
+    ("Stiefel-Scheifele: Cowell and DROMO against the oracle (paper section 4.1, Figure 3)", "stiefel_table", [],
+     "stiefel_table.md", _stiefel_gates),
+    ("Electrodynamic de-orbit (paper section 5, Figure 7)", "deorbit", [], None, _deorbit_gates),
+    ("Rod-count convergence", "convergence", ["--quiet"], "convergence.md", None),
+    ("What accuracy costs in time (work-precision)", "workprecision", ["--quiet"], "work_precision.md", None),
+    ("Hard cases", "hard_cases", ["--quiet"], "hard_cases.md", _hard_cases_gates),
 ]
+
+
+def _summary_md(name: str, sdir: Path) -> str:
+    """A section for a study that writes JSON/CSV and figures but no Markdown of its own."""
+    lines = []
+    for csv in sorted(sdir.glob("*.csv")):
+        import pandas as pd
+
+        df = pd.read_csv(csv)
+        keep = [c for c in df.columns if df[c].dtype != object or c in ("label", "case", "method")][:12]
+        lines += [f"`{csv.name}`:", "", _table_md(df[keep].to_dict("records")), ""]
+    lines += [f"![{png.stem}]({png.name})" for png in sorted(sdir.glob("*.png"))]
+    return "\n".join(lines)
 
 
 def run_studies(out: Path, only=None):
     """Run every study into out/<name>/; a study that fails is reported (its gates then fail),
     the others still run."""
     sections, values, failures = [], {}, []
-    for title, name, md_name, gates_fn in STUDIES:
-        if only and name not in only:
+    for title, name, extra, md_name, gates_fn in STUDIES:
+        if only is not None and name not in only:
             continue
         sdir = out / name
         sdir.mkdir(parents=True, exist_ok=True)
         t0 = time.perf_counter()
         try:
-            _load_study(name).main([str(sdir)])
+            _load_study(name).main([str(sdir), *extra])
             values.update(gates_fn(sdir) if gates_fn else {})
-            md = (sdir / md_name).read_text()
+            md = (sdir / md_name).read_text() if md_name else _summary_md(name, sdir)
             # images and links in the study's Markdown are relative to its own directory
             md = re.sub(r"\]\((?!https?:)([^)]+)\)", lambda m: f"]({name}/{m.group(1)})", md)
             sections.append((title, md, time.perf_counter() - t0))
