@@ -116,7 +116,7 @@ class LateralMode:
     omega_rad_s: float  # angular frequency of the mode (inertial time)
     lam: float  # eigenvalue lambda = Omega^2 - omega^2 of (T Z')' + lambda rho Z = 0
 
-    shape: object  # callable Z(s) (normalised to Z(0) = 1)
+    shape: object  # callable Z(s), normalised to max |Z| = 1 over [0, L]
 
 
 def _oop_shoot(lam, m0, mf, rho, L, tension, dense=False):
@@ -154,7 +154,8 @@ def out_of_plane_modes(m0_kg, mf_kg, tether_mass_kg, length_m, omega_rad_s, coun
         if vals[i] * vals[i + 1] < 0:
             k = brentq(lambda k: _oop_shoot(k * k, m0_kg, mf_kg, rho, length_m, tension)[0], grid[i], grid[i + 1], xtol=1e-15, rtol=1e-14)
             sol = _oop_shoot(k * k, m0_kg, mf_kg, rho, length_m, tension, dense=True)[1]
-            modes.append(LateralMode(math.sqrt(omega_rad_s**2 + k * k), k * k, lambda s, sol=sol: sol.sol(s)[0]))
+            peak = float(np.max(np.abs(sol.sol(np.linspace(0.0, length_m, 2001))[0])))
+            modes.append(LateralMode(math.sqrt(omega_rad_s**2 + k * k), k * k, lambda s, sol=sol, c=peak: sol.sol(s)[0] / c))
             if len(modes) == count:
                 break
     if len(modes) < count:
