@@ -1,7 +1,6 @@
 """Lumped-mass ("bead") tether model: an oracle for TMED that shares no tether code with it.
 
-The standard discretisation of the tether literature (e.g. Beletsky & Levin 1993, ch. 1; Kim &
-Vadali 2001 "Modeling issues related to retrieval of flexible tethered satellite systems"):
+The standard discretisation of the tether literature (e.g. Beletsky & Levin 1993, ch. 1):
 a tether of unstretched length L, mass m_t = rho L and axial stiffness EA between two point
 masses m0 (root) and mf (tip) becomes N interior beads joined by N + 1 massless linear springs of
 unstretched length l = L/(N+1).  Each segment's mass rho l is lumped half on each of its two
