@@ -33,5 +33,9 @@ def test_every_gate_is_measured_by_verify():
     for node in ast.walk(tree):
         if isinstance(node, ast.Dict):
             produced |= {k.value for k in node.keys if isinstance(k, ast.Constant) and isinstance(k.value, str)}
+        if isinstance(node, ast.Assign):  # out["gate"] = value
+            for tgt in node.targets:
+                if isinstance(tgt, ast.Subscript) and isinstance(tgt.slice, ast.Constant):
+                    produced.add(tgt.slice.value)
     missing = set(_gates()) - produced
     assert not missing, f"gates that make verify never measures: {sorted(missing)}"

@@ -254,6 +254,7 @@ STUDIES = [
     ("Stiefel-Scheifele: Cowell and DROMO against the oracle (paper section 4.1, Figure 3)", "stiefel_table", [],
      "stiefel_table.md", _stiefel_gates),
     ("Electrodynamic de-orbit (paper section 5, Figure 7)", "deorbit", [], None, _deorbit_gates),
+    ("Lumped-mass (bead) model against TMED", "bead_vs_tmed", [], "bead_vs_tmed.md", None),
     ("Rod-count convergence", "convergence", ["--quiet"], "convergence.md", None),
     ("What accuracy costs in time (work-precision)", "workprecision", ["--quiet"], "work_precision.md", None),
     ("Hard cases", "hard_cases", ["--quiet"], "hard_cases.md", _hard_cases_gates),
