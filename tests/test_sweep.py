@@ -60,7 +60,7 @@ def test_resume_after_interruption_runs_nothing_twice(tmp_path):
 
     with pytest.raises(KeyboardInterrupt):
         run_sweep(sc, orbit_radius, cache_dir=tmp_path, workers=1, progress=False, on_record=interrupt)
-    assert len(seen) == 1 and len(list(tmp_path.glob("*.json"))) == 1
+    assert len(seen) == 1 and len(list(tmp_path.glob("*/*.json"))) == 1
     first = run_sweep(sc, orbit_radius, cache_dir=tmp_path, workers=1, progress=False)
     assert (first.n_cached, first.n_run) == (1, 2)  # only the two unfinished runs
     again = run_sweep(sc, orbit_radius, cache_dir=tmp_path, workers=1, progress=False)
@@ -78,7 +78,7 @@ def test_failed_runs_are_recorded_with_their_message(tmp_path):
     (rec,) = res.records
     assert not rec.ok and rec.error == "RuntimeError: deliberate failure for sweep-test"
     # cached like a success (deterministic), with the message, so it is never lost
-    cached = json.loads(next(tmp_path.glob("*.json")).read_text())
+    cached = json.loads(next(tmp_path.glob("*/*.json")).read_text())
     assert cached["ok"] is False and "deliberate failure" in cached["error"]
     again = run_sweep([bad], failing_summary, cache_dir=tmp_path, workers=1, progress=False)
     assert again.n_run == 0 and again.records[0].error == rec.error

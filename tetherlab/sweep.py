@@ -10,10 +10,10 @@ progress with tqdm, and returns one :class:`RunRecord` per scene, in the order g
 Caching and resuming.  A run is identified by the SHA-256 of its scene (``scene.to_dict()``
 serialised as JSON with sorted keys: the exact SI values, so two scenes that differ in any digit
 differ) and the summary function's import name.  Each finished run is written at once to
-``<cache_dir>/<scene hash>.<summary name>.json``, so a sweep interrupted at any point (Ctrl-C, a
-killed job) resumes by being called again: finished runs are read back, not redone.  The cache
-does not know when the *code* changed: delete the directory after changing tetherlab or a
-summary function (``make verify`` writes into a fresh report directory).
+``<cache_dir>/<code digest>/<scene hash>.<summary name>.json``, so a sweep interrupted at any point
+(Ctrl-C, a killed job) resumes by being called again: finished runs are read back, not redone.
+The code digest (a hash of every tetherlab source file) makes a changed package recompute; a
+summary function defined outside tetherlab is not covered by it.
 
 Failures are never lost and never silent.  A run whose scene or summary raised (a
 ``SimulationError`` naming the rod that collapsed, a ``SceneError``, a bug) comes back with
@@ -169,8 +169,12 @@ def run_one(scene, summary: Callable) -> dict[str, Any]:
 
 
 def _cache_path(cache_dir: Path, h: str, sname: str) -> Path:
+    # The code's digest (every tetherlab source file, as for the numba cache) is part of the key:
+    # after any change to the package a sweep recomputes instead of reading stale results.
+    from ._jit import CACHE_DIR
+
     safe = "".join(c if c.isalnum() or c in "._-" else "_" for c in sname)
-    return cache_dir / f"{h}.{safe}.json"
+    return cache_dir / CACHE_DIR.name / f"{h}.{safe}.json"
 
 
 def _read_cache(path: Path) -> dict | None:
@@ -195,6 +199,7 @@ def _write_cache(path: Path, record: RunRecord, sname: str, scene_dict: dict) ->
         "wall_s": record.wall_s,
         "scene": scene_dict,
     }
+    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(f".tmp{os.getpid()}")
     tmp.write_text(json.dumps(data, indent=1, sort_keys=True))
     os.replace(tmp, path)  # atomic: an interruption never leaves half a record behind
