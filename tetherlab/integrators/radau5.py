@@ -801,7 +801,12 @@ def radau5_core(
             stats[ST_REJECTED] += 1
             n_rej += 1
             bad_kind = 0
-            need_jac = not caljac
+            # Hairer refreshes the Jacobian here (need_jac = not caljac).  An error-test rejection
+            # says the step was too long, not that J is stale: the Newton iteration converged with
+            # it.  Keeping J (the LU is redone for the new h) saves n rhs calls per rejection (14 %
+            # of all calls on bench-libration); a stale J still shows as a slow Newton rate
+            # (theta > THET), which refreshes it after the next step, or as a Newton failure.
+            need_jac = False
 
     fs[_F_HOLD] = hold
     fs[_F_THETA] = theta

@@ -44,39 +44,53 @@ def body_force(p, t, body, x, y, z, vx, vy, vz, mass):
             fx += mass * ax
             fy += mass * ay
             fz += mass * az
-        elif code == uniform_gravity.CODE:
-            fz += mass * uniform_gravity.accel(p[par], x, y, z)[2]
-        elif code == applied_force.CODE:
-            if body == int(p[par]):
-                fx += p[par + 1]
-                fy += p[par + 2]
-                fz += p[par + 3]
-        # -- gravity family (codes 10-13): zonal harmonics, DE421 third bodies
-        elif code == zonal.CODE_J2:
-            ax, ay, az = zonal.accel_j2(p[par], p[par + 1], p[par + 2], x, y, z)
-            fx += mass * ax
-            fy += mass * ay
-            fz += mass * az
-        elif code == zonal.CODE_ZONAL:
-            ax, ay, az = zonal.accel(p[par], p[par + 1], p[par + 2], p[par + 3], p[par + 4], x, y, z)
-            fx += mass * ax
-            fy += mass * ay
-            fz += mass * az
-        elif code == third_body.CODE_MOON or code == third_body.CODE_SUN:
-            ax, ay, az = third_body.accel(p, par, t, x, y, z)
-            fx += mass * ax
-            fy += mass * ay
-            fz += mass * az
-        elif code == drag.CODE:  # (electrodynamic: no force on point masses)
-            ax, ay, az = drag.body_force(p, par, body, x, y, z, vx, vy, vz)
+        else:
+            ax, ay, az = _other_body(p, code, par, t, body, x, y, z, vx, vy, vz, mass)
             fx += ax
             fy += ay
             fz += az
-        elif code == stiefel_moon.CODE:
-            ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
-            fx += mass * ax
-            fy += mass * ay
-            fz += mass * az
+    return fx, fy, fz
+
+
+@njit(cache=True)
+def _other_body(p, code, par, t, body, x, y, z, vx, vy, vz, mass):
+    """Every effect but central gravity (kept out of the hot loop so that loop stays small)."""
+    fx = 0.0
+    fy = 0.0
+    fz = 0.0
+    if code == uniform_gravity.CODE:
+        fz += mass * uniform_gravity.accel(p[par], x, y, z)[2]
+    elif code == applied_force.CODE:
+        if body == int(p[par]):
+            fx += p[par + 1]
+            fy += p[par + 2]
+            fz += p[par + 3]
+    # -- gravity family (codes 10-13): zonal harmonics, DE421 third bodies
+    elif code == zonal.CODE_J2:
+        ax, ay, az = zonal.accel_j2(p[par], p[par + 1], p[par + 2], x, y, z)
+        fx += mass * ax
+        fy += mass * ay
+        fz += mass * az
+    elif code == zonal.CODE_ZONAL:
+        ax, ay, az = zonal.accel(p[par], p[par + 1], p[par + 2], p[par + 3], p[par + 4], x, y, z)
+        fx += mass * ax
+        fy += mass * ay
+        fz += mass * az
+    elif code == third_body.CODE_MOON or code == third_body.CODE_SUN:
+        ax, ay, az = third_body.accel(p, par, t, x, y, z)
+        fx += mass * ax
+        fy += mass * ay
+        fz += mass * az
+    elif code == drag.CODE:  # (electrodynamic: no force on point masses)
+        ax, ay, az = drag.body_force(p, par, body, x, y, z, vx, vy, vz)
+        fx += ax
+        fy += ay
+        fz += az
+    elif code == stiefel_moon.CODE:
+        ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
+        fx += mass * ax
+        fy += mass * ay
+        fz += mass * az
     return fx, fy, fz
 
 
@@ -97,39 +111,53 @@ def rod_force_density(p, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
             fx += mass_per_xi * ax
             fy += mass_per_xi * ay
             fz += mass_per_xi * az
-        elif code == uniform_gravity.CODE:
-            fz += mass_per_xi * uniform_gravity.accel(p[par], x, y, z)[2]
-        # -- gravity family (codes 10-13): zonal harmonics, DE421 third bodies
-        elif code == zonal.CODE_J2:
-            ax, ay, az = zonal.accel_j2(p[par], p[par + 1], p[par + 2], x, y, z)
-            fx += mass_per_xi * ax
-            fy += mass_per_xi * ay
-            fz += mass_per_xi * az
-        elif code == zonal.CODE_ZONAL:
-            ax, ay, az = zonal.accel(p[par], p[par + 1], p[par + 2], p[par + 3], p[par + 4], x, y, z)
-            fx += mass_per_xi * ax
-            fy += mass_per_xi * ay
-            fz += mass_per_xi * az
-        elif code == third_body.CODE_MOON or code == third_body.CODE_SUN:
-            ax, ay, az = third_body.accel(p, par, t, x, y, z)
-            fx += mass_per_xi * ax
-            fy += mass_per_xi * ay
-            fz += mass_per_xi * az
-        elif code == electrodynamic.CODE:
-            ax, ay, az = electrodynamic.rod_density(p, par, t, x, y, z, tx, ty, tz)
+        else:
+            ax, ay, az = _other_rod(p, code, par, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi)
             fx += ax
             fy += ay
             fz += az
-        elif code == drag.CODE:
-            ax, ay, az = drag.rod_density(p, par, rod, x, y, z, vx, vy, vz, tx, ty, tz)
-            fx += ax
-            fy += ay
-            fz += az
-        elif code == stiefel_moon.CODE:
-            ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
-            fx += mass_per_xi * ax
-            fy += mass_per_xi * ay
-            fz += mass_per_xi * az
+    return fx, fy, fz
+
+
+@njit(cache=True)
+def _other_rod(p, code, par, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
+    """Every effect but central gravity (kept out of the hot loop so that loop stays small)."""
+    fx = 0.0
+    fy = 0.0
+    fz = 0.0
+    if code == uniform_gravity.CODE:
+        fz += mass_per_xi * uniform_gravity.accel(p[par], x, y, z)[2]
+    # -- gravity family (codes 10-13): zonal harmonics, DE421 third bodies
+    elif code == zonal.CODE_J2:
+        ax, ay, az = zonal.accel_j2(p[par], p[par + 1], p[par + 2], x, y, z)
+        fx += mass_per_xi * ax
+        fy += mass_per_xi * ay
+        fz += mass_per_xi * az
+    elif code == zonal.CODE_ZONAL:
+        ax, ay, az = zonal.accel(p[par], p[par + 1], p[par + 2], p[par + 3], p[par + 4], x, y, z)
+        fx += mass_per_xi * ax
+        fy += mass_per_xi * ay
+        fz += mass_per_xi * az
+    elif code == third_body.CODE_MOON or code == third_body.CODE_SUN:
+        ax, ay, az = third_body.accel(p, par, t, x, y, z)
+        fx += mass_per_xi * ax
+        fy += mass_per_xi * ay
+        fz += mass_per_xi * az
+    elif code == electrodynamic.CODE:
+        ax, ay, az = electrodynamic.rod_density(p, par, t, x, y, z, tx, ty, tz)
+        fx += ax
+        fy += ay
+        fz += az
+    elif code == drag.CODE:
+        ax, ay, az = drag.rod_density(p, par, rod, x, y, z, vx, vy, vz, tx, ty, tz)
+        fx += ax
+        fy += ay
+        fz += az
+    elif code == stiefel_moon.CODE:
+        ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
+        fx += mass_per_xi * ax
+        fy += mass_per_xi * ay
+        fz += mass_per_xi * az
     return fx, fy, fz
 
 
