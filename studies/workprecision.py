@@ -118,13 +118,19 @@ def figures(rows, out: Path):
         if r["ok"]:
             series.setdefault((r["case"], r["method"]), []).append(r)
     for xkey, xlabel, name in (("wall_s", "integrator wall time (s)", "wall"), ("n_rhs", "rhs evaluations", "rhs")):
-        fig, ax = plt.subplots(figsize=(6.5, 4.5))
+        fig, ax = plt.subplots(figsize=(8, 5.5))
+        # colour = integrator, marker = case: every series stays identifiable past 10 of them
+        methods = sorted({m for _, m in series})
+        cases = sorted({c for c, _ in series})
+        colours = {m: f"C{k}" for k, m in enumerate(methods)}
+        markers = {c: "osD^v<>px*h+"[k % 12] for k, c in enumerate(cases)}
         for (case, method), pts in sorted(series.items()):
             pts = sorted(pts, key=lambda r: r["tol"])
             # an error of exactly 0 (identical to the reference) cannot be drawn on log axes
             xs = [r[xkey] for r in pts if r["error_m"] > 0]
             ys = [r["error_m"] for r in pts if r["error_m"] > 0]
-            ax.loglog(xs, ys, "o-", ms=3, label=f"{case}, {method}")
+            ax.loglog(xs, ys, "-", marker=markers[case], color=colours[method], ms=4, lw=0.8,
+                      label=f"{case}, {method}")
         ax.set_xlabel(xlabel)
         ax.set_ylabel("final position error (m)")
         ax.grid(True, which="both", alpha=0.3)
