@@ -531,9 +531,9 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
         {"t_s": float(te), "event": prep.event_names[k], "side": "taut" if side > 0 else "slack"}
         if prep.event_names[k].startswith("slack.") else
         {"t_s": float(te), "event": prep.event_names[k]}
-        for te, k, side in getattr(res, "events", ())
+        for te, k, side in res.events
     ]  # fmt: skip
-    stopped = getattr(res, "stopped_by", None)
+    stopped = res.stopped_by
     stats["stopped_by"] = None if stopped is None else prep.event_names[stopped]
     message = res.message if res.status == 0 else failure_message(p, prep.model, res.status, res.t_end, res.message)
     d = diag.compute(prep.model, res.t, res.y)
