@@ -134,9 +134,9 @@ def test_sigma_form_elements_are_constant_without_perturbation():
     pe = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, MU, L, prep.y0.size)
     z0 = np.concatenate([[0.0], dromo.cartesian_to_dromo(r, v, MU, L)])
     res = integrate("dop853", dromo.dromo_sigma_rhs, 0.0, z0, [0.0, 20.0], pe, 1e-12, 1e-12)
-    # the perturbation is the central force minus itself: zero to round-off (~1e-16 of mu/r^2),
-    # so the seven elements move by round-off only
-    assert np.max(np.abs(res.y[-1, 1:] - z0[1:])) < 1e-13
+    # central gravity is not evaluated in the sigma form (perturbing_body_force skips it), so the
+    # perturbation is exactly zero and the seven elements do not move at all
+    assert np.array_equal(res.y[-1, 1:], z0[1:])
     # tau advanced by the integral of 1/(q3^3 s^2) = Kepler time over ~3.2 revolutions
     assert res.y[-1, 0] > 0
 
@@ -190,3 +190,85 @@ def test_formulation_validation():
     with pytest.raises(SceneError) as exc:
         simulate(scene.replace(**{"integrator.max_step": "60 s"}), progress=False)
     assert "integrator.max_step" in str(exc.value)
+
+
+def _stiefel_sigma_run(t_out, method="dop853", tol=1e-11):
+    from tetherlab.kernel.layout import FORM_DROMO_SIGMA
+    from tetherlab.pipeline import prepare
+
+    scene = load_scene(SCENES / "stiefel-scheifele.toml")
+    prep = prepare(scene)
+    mu = prep.mu_m3_s2
+    L = float(np.linalg.norm(prep.y0[:3]))
+    pe = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
+    return dromo.integrate_sigma(method, pe, prep.y0[:3], prep.y0[3:6], t_out, tol, tol, mu, L), prep
+
+
+def test_sigma_clock_outputs_do_not_alter_the_trajectory():
+    """DOP853's compiled clock loop restarts from the start of the crossing step after each
+    output, so the outputs do not move the integration's path: the only difference is that a
+    restart forgets the step controller's last rejection (which caps the next step)."""
+    t_f = 20 * 86400.0
+    few, _ = _stiefel_sigma_run(np.array([0.0, t_f]))
+    many, _ = _stiefel_sigma_run(np.linspace(0.0, t_f, 37))
+    assert few.status == 0 and many.status == 0, (few.message, many.message)
+    # measured 0.5 mm after 20 days at tol 1e-11, with the same step count; the integration's own
+    # error there is ~6 cm (0.87 m over 50 revolutions, Figure-3 table): bound 2 mm
+    assert np.linalg.norm(few.y[-1, :3] - many.y[-1, :3]) < 2e-3
+    assert few.stats["n_accepted"] == many.stats["n_accepted"]
+    assert many.t.size == 37 and np.array_equal(many.t, np.linspace(0.0, t_f, 37))
+    # the located sigma leaves t_k - t(sigma_k) at the level of the dense output's error in tau;
+    # it is stepped over with the Kepler acceleration (its neglected g^3 term is < 1e-12 m here)
+    assert many.stats["time_residual_max_s"] < 1e-3
+
+
+def test_sigma_clock_agrees_with_the_grid_search():
+    """The compiled clock (DOP853) and the sigma grid + Newton search (the other methods' path)
+    give the same states at the same output times, to the integration's own accuracy."""
+    t_out = np.linspace(0.0, 20 * 86400.0, 5)
+    clock, prep = _stiefel_sigma_run(t_out, tol=1e-12)
+    mu = prep.mu_m3_s2
+    L = float(np.linalg.norm(prep.y0[:3]))
+    from tetherlab.kernel.layout import FORM_DROMO_SIGMA
+
+    pe = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
+    grid = dromo._integrate_sigma_grid("dop853", pe, prep.y0[:3], prep.y0[3:6], t_out, 1e-12, 1e-12,
+                                       mu, L, 0.0, 10**7, None, dromo.GRID_PER_REV)  # fmt: skip
+    assert clock.status == 0 and grid.status == 0
+    # both are DOP853 at 1e-12 over 3.5 revolutions of the Stiefel orbit (about 4 cm/revolution
+    # at 1e-11 in the Figure-3 table): they differ by the outputs' path only; bound 1 cm
+    dr = np.max(np.linalg.norm(clock.y[:, :3] - grid.y[:, :3], axis=1))
+    assert dr < 1e-2, dr
+
+
+def test_sigma_clock_reports_a_failure_with_the_rows_before_it():
+    """A step budget that runs out mid-way returns the rows computed so far and says why."""
+    res, _ = _stiefel_sigma_run(np.linspace(0.0, 20 * 86400.0, 11))
+    full = res.stats["n_accepted"]
+    from tetherlab.kernel.layout import FORM_DROMO_SIGMA
+    from tetherlab.pipeline import prepare
+
+    prep = prepare(load_scene(SCENES / "stiefel-scheifele.toml"))
+    mu = prep.mu_m3_s2
+    L = float(np.linalg.norm(prep.y0[:3]))
+    pe = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
+    cut = dromo.integrate_sigma("dop853", pe, prep.y0[:3], prep.y0[3:6], res.t, 1e-11, 1e-11, mu, L,
+                                max_steps=full // 2)  # fmt: skip
+    assert cut.status == 1 and "step" in cut.message.lower()
+    assert 1 <= cut.t.size < res.t.size
+    assert np.array_equal(cut.y, res.y[: cut.t.size])
+
+
+def test_perturbing_body_force_is_body_force_without_central_gravity():
+    from tetherlab.forces import central_gravity
+    from tetherlab.kernel.effects import body_force, perturbing_body_force
+    from tetherlab.pipeline import prepare
+
+    prep = prepare(load_scene(SCENES / "stiefel-scheifele.toml"))
+    p = prep.model.fresh_params()
+    x = (7.1e6, -1.2e6, 2.3e6, 10.0, 7000.0, 5.0)
+    total = np.array(body_force(p, 1234.5, 0, *x, 2.0))
+    pert = np.array(perturbing_body_force(p, 1234.5, 0, *x, 2.0))
+    kepler = 2.0 * np.array(central_gravity.accel(prep.mu_m3_s2, *x[:3]))
+    assert np.allclose(pert + kepler, total, rtol=1e-15, atol=0.0)
+    assert np.linalg.norm(pert) < 1e-2 * np.linalg.norm(kepler)  # J2 + Moon: a perturbation

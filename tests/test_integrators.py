@@ -647,3 +647,40 @@ def test_bad_inputs_raise_value_error_naming_the_argument(change, name):
 def test_bad_method_lists_valid_ones():
     with pytest.raises(ValueError, match="scipy:LSODA"):
         integrate(**{**GOOD, "method": "lsoda"})
+
+
+def test_dop853_step_is_the_kernels_fixed_step():
+    """dop853_step (used by DROMO's output clock) is exactly one step of the kernel."""
+    from tetherlab.integrators.dop853 import dop853_step
+
+    h = 0.37
+    (s, t, _, _), y_kernel, _, _ = run_kernel(dop853_run, kepler, 0.0, Y0_KEPLER, np.array([h]),
+                                               1e-9, 1e-9, h=h, fixed_step=True)  # fmt: skip
+    assert s == 0 and t == h
+    K = np.empty((16, 4))
+    y_new = np.empty(4)
+    stats = np.zeros(8, dtype=np.int64)
+    st = dop853_step(kepler, 0.0, Y0_KEPLER.copy(), h, NO_P, K, np.empty(4), y_new, stats)
+    assert st == 0 and stats[2] == 12
+    assert np.array_equal(y_new, y_kernel)
+
+
+def test_raw_pointers_address_the_right_elements_and_refuse_strided_views():
+    import numba
+    from numba.core.errors import TypingError
+
+    from tetherlab._jit import ptr, row_ptr
+
+    @numba.njit
+    def read(a, i):
+        return ptr(a[i])[1], row_ptr(a, i)[2]
+
+    a = np.arange(12.0).reshape(3, 4)
+    assert read(a, 2) == (a[2, 1], a[2, 2])
+
+    @numba.njit
+    def strided(a):
+        return ptr(a[:, 1])[0]
+
+    with pytest.raises(TypingError):
+        strided(a)

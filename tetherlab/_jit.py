@@ -69,3 +69,47 @@ RHS_SIG = types.int64(
 def rhs_cfunc(func):
     """Compile ``func(t, y, dydt, p) -> int`` (pointer arguments) as a cached cfunc with RHS_SIG."""
     return numba.cfunc(RHS_SIG, cache=True, nopython=True)(func)
+
+
+# ------------------------------------------------------------------------------------------------
+# Raw data pointers for the rhs ABI.  ``arr.ctypes`` inside a kernel builds an object that holds a
+# reference to the array: an atomic NRT incref before the call and a decref after it, for each of
+# the three pointer arguments.  Measured on a trivial rhs, that costs ~40 ns per call -- more than
+# a DROMO rhs's whole force model -- so the integrators pass these plain pointers instead.  The
+# caller keeps the arrays alive for the duration of the call (they are its own locals/arguments).
+# ------------------------------------------------------------------------------------------------
+from numba.core import cgutils  # noqa: E402
+from numba.extending import intrinsic  # noqa: E402
+
+
+@intrinsic
+def ptr(typingctx, arr):
+    """``float64*`` to the first element of a C-contiguous float64 array (no reference counting).
+    Any other array type fails to compile, so a strided view can never reach the rhs."""
+    if not (isinstance(arr, types.Array) and arr.dtype == types.float64 and arr.layout == "C"):
+        return None
+    sig = types.CPointer(types.float64)(arr)
+
+    def codegen(context, builder, signature, args):
+        ary = context.make_array(signature.args[0])(context, builder, value=args[0])
+        return ary.data
+
+    return sig, codegen
+
+
+@intrinsic
+def row_ptr(typingctx, arr, i):
+    """``float64*`` to ``arr[i, 0]`` of a 2-D float64 array (no reference counting)."""
+    if not (isinstance(arr, types.Array) and arr.dtype == types.float64 and arr.ndim == 2
+            and arr.layout == "C" and isinstance(i, types.Integer)):  # fmt: skip
+        return None
+    sig = types.CPointer(types.float64)(arr, i)
+
+    def codegen(context, builder, signature, args):
+        aryty = signature.args[0]
+        ary = context.make_array(aryty)(context, builder, value=args[0])
+        idx = context.cast(builder, args[1], signature.args[1], types.intp)
+        zero = context.get_constant(types.intp, 0)
+        return cgutils.get_item_pointer(context, builder, aryty, ary, [idx, zero], wraparound=False)
+
+    return sig, codegen

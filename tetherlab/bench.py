@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._jit import njit
+from ._jit import njit, ptr
 
 ROOT = Path(__file__).resolve().parent.parent
 METHODS = ("dop853", "radau5", "scipy:DOP853")
@@ -31,7 +31,7 @@ BENCH_SCENE = ROOT / "studies" / "scenes" / "bench-libration.toml"
 def _time_rhs(rhs, y, dy, p, ncalls):
     s = 0
     for _ in range(ncalls):
-        s += rhs(0.0, y.ctypes, dy.ctypes, p.ctypes)
+        s += rhs(0.0, ptr(y), ptr(dy), ptr(p))  # as the integrators call it (no refcounting)
     return s
 
 

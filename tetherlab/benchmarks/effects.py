@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from .._jit import njit
+from .._jit import njit, ptr
 
 #: cumulative effect sets, each a row of the table
 EFFECT_SETS = (
@@ -35,7 +35,7 @@ DURATION_S = 10 * 86400.0  # the ephemeris fit covers this (3 segments + 1 spare
 def _time_rhs_advancing(rhs, y, dy, p, ncalls):
     s = 0
     for k in range(ncalls):
-        s += rhs(1.0 * k, y.ctypes, dy.ctypes, p.ctypes)
+        s += rhs(1.0 * k, ptr(y), ptr(dy), ptr(p))  # as the integrators call it (no refcounting)
     return s
 
 

@@ -17,11 +17,12 @@ Two forms, both compiled cfuncs with the integrators' RHS_SIG:
   elements with sigma as a state, the rods' d_i, d_i' exactly as in Cowell,
   state y = [sigma, q1, q2, q3, eta1..eta4, d_1..d_N, d_1'..d_N'].
 
-Output at physical times with the sigma form (:func:`integrate_sigma`): sigma is integrated on a
-coarse grid (8 points a revolution, dense output) past the last requested time; each requested
-t_k is bracketed between two grid states and t(sigma) = t_k is solved by a safeguarded Newton
-iteration whose function evaluations are short integrations from the bracketing grid state
-(dt/dsigma = T/(q3^3 s^2) is the Newton derivative).  Docs/dromo.md section 5 says why.
+Output at physical times with the sigma form (:func:`integrate_sigma`): with DOP853, inside the
+compiled loop (:func:`_clock_run`): an event tau = t_k/T located on the dense output, then one
+DOP853 step from the crossing step's start to the located sigma; with the other methods, sigma
+is integrated on a coarse grid (8 points a revolution) and t(sigma) = t_k is solved by a
+safeguarded Newton iteration whose evaluations are short integrations from the bracketing grid
+state (dt/dsigma = T/(q3^3 s^2) is the Newton derivative).  Docs/dromo.md section 5 says why.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ import numpy as np
 from numba import carray
 
 from .._jit import njit, rhs_cfunc
-from ..kernel.effects import body_force
+from ..kernel.effects import perturbing_body_force
 from ..kernel.layout import (
     FORM_DROMO_SIGMA,
     FORM_DROMO_TIME,
@@ -41,11 +42,18 @@ from ..kernel.layout import (
     H_OFF_FORM,
     H_ROOT_M,
 )
+from ..integrators.dop853 import EVENT as EVENT_STATUS
+from ..integrators.dop853 import MAX_STEPS as MAX_STEPS_STATUS
+from ..integrators.dop853 import NON_FINITE as NON_FINITE_STATUS
+from ..integrators.dop853 import OK as OK_STATUS
+from ..integrators.dop853 import RHS_FAILED as RHS_FAILED_STATUS
+from ..integrators.dop853 import ST_ACCEPTED, ST_RHS_STATUS, dop853_core, dop853_step
 from ..tether.chain import accelerations
 
 # Formulation block (at p[H_OFF_FORM]): mu, L, T, Cowell state length, DROMO state length;
 # a scratch buffer (q, q', acc of the Cowell coordinates) starts at FP_BUF.
 FP_MU, FP_L, FP_T, FP_NCOW, FP_NSTATE = 0, 1, 2, 3, 4
+FP_CLOCK = 5  # sigma form: the output time tau_k = t_k/T the clock event looks for
 FP_BUF = 8
 N_EL = 7  # q1 q2 q3 eta1 eta2 eta3 eta4
 TWO_PI = 2.0 * math.pi
@@ -135,12 +143,16 @@ def root_state(sigma, y, L, T):
 @njit(cache=True)
 def _perturbation_rates(c, sn, y, ax_, ay_, az_, rx, ry, rz, ix, iy, iz, jx, jy, jz, kx, ky, kz,
                         mu, L, dy):  # fmt: skip
-    """Subtract central gravity from the total acceleration (SI), project, scale, rates in dy."""
+    """Subtract central gravity from the total acceleration (SI), then :func:`_projected_rates`."""
     r2 = rx * rx + ry * ry + rz * rz
     g = mu / (r2 * math.sqrt(r2))
-    px = ax_ + g * rx
-    py = ay_ + g * ry
-    pz = az_ + g * rz
+    _projected_rates(c, sn, y, ax_ + g * rx, ay_ + g * ry, az_ + g * rz, ix, iy, iz, jx, jy, jz,
+                     kx, ky, kz, mu, L, dy)  # fmt: skip
+
+
+@njit(cache=True)
+def _projected_rates(c, sn, y, px, py, pz, ix, iy, iz, jx, jy, jz, kx, ky, kz, mu, L, dy):
+    """Project the perturbing acceleration (SI) on the orbital frame, scale, rates in dy."""
     scale = L * L / mu  # acceleration unit mu/L^2
     fr = (px * ix + py * iy + pz * iz) * scale
     ft = (px * jx + py * jy + pz * jz) * scale
@@ -159,9 +171,20 @@ def dromo_sigma_rhs(sigma, y_ptr, dy_ptr, p_ptr):
     T = p[off + FP_T]
     rx, ry, rz, vx, vy, vz, ix, iy, iz, jx, jy, jz, kx, ky, kz, c, sn = root_state(sigma, y, L, T)
     m0 = p[H_ROOT_M]
-    fx, fy, fz = body_force(p, T * y[0], 0, rx, ry, rz, vx, vy, vz, m0)
-    _perturbation_rates(c, sn, y, fx / m0, fy / m0, fz / m0, rx, ry, rz, ix, iy, iz, jx, jy, jz,
-                        kx, ky, kz, mu, L, dy)  # fmt: skip
+    # central gravity is the Kepler part DROMO integrates analytically: only the rest is evaluated
+    fx, fy, fz = perturbing_body_force(p, T * y[0], 0, rx, ry, rz, vx, vy, vz, m0)
+    _projected_rates(c, sn, y, fx / m0, fy / m0, fz / m0, ix, iy, iz, jx, jy, jz, kx, ky, kz, mu,
+                     L, dy)  # fmt: skip
+    return 0
+
+
+@rhs_cfunc
+def dromo_clock_event(sigma, y_ptr, g_ptr, p_ptr):
+    """Event g = tau - tau_k (tau_k at p[off + FP_CLOCK]): the sigma at which the physical time
+    reaches an output time (the sigma form's outputs, :func:`integrate_sigma`)."""
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    g = carray(g_ptr, (1,))
+    g[0] = y_ptr[0] - p[int(p[H_OFF_FORM]) + FP_CLOCK]
     return 0
 
 
@@ -206,6 +229,62 @@ def dromo_time_rhs(t, y_ptr, dy_ptr, p_ptr):
         dy[8 + i] = y[8 + nd + i]
         dy[8 + nd + i] = acc[3 + i]
     return 0
+
+
+@njit(cache=True)
+def _clock_run(rhs, event, sig, z, h, targets, k, p, rtol, atol, sig_max, max_steps, out_sig, out_z,
+               stats):  # fmt: skip
+    """Sigma-form outputs k, k+1, ... at the non-dimensional times ``targets`` (compiled loop).
+
+    DOP853 runs with the event g = tau - targets[k]; at a crossing it returns with (sig, z) at
+    the start of the crossing step and the located sigma in ev[0].  One DOP853 step from there to
+    ev[0] gives output k; the target moves on and the integration restarts from the same step
+    start (redoing that step), so outputs do not move the path (a restart only forgets the
+    controller's last rejection, which caps the next step).  Returns (status, sig, h, k, sig_max); status MAX_STEPS after ``max_steps`` accepted steps (the caller continues).
+    """
+    n = z.shape[0]
+    off = int(p[H_OFF_FORM])
+    m = targets.shape[0]
+    ev = np.zeros(4)
+    tout = np.empty(1)
+    yout = np.empty((1, n))
+    K = np.empty((16, n))
+    ys = np.empty(n)
+    znew = np.empty(n)
+    acc0 = stats[ST_ACCEPTED]
+    while k < m:
+        if targets[k] <= z[0]:  # an output at the start time
+            out_sig[k] = sig
+            out_z[k, :] = z
+            k += 1
+            continue
+        p[off + FP_CLOCK] = targets[k]
+        left = max_steps - (stats[ST_ACCEPTED] - acc0)
+        if left <= 0:
+            return MAX_STEPS_STATUS, sig, h, k, sig_max
+        tout[0] = sig_max
+        # no forced side on (re)start: the target is new, so g < 0 there is a fresh fact
+        ev[0] = 0.0
+        ev[1] = -1.0
+        ev[2] = -1.0
+        ev[3] = 0.0
+        st, sig, h, nd = dop853_core(rhs, sig, z, tout, p, rtol, atol, h, 0.0, left, yout, stats,
+                                     False, event, 1, ev)  # fmt: skip
+        if st == EVENT_STATUS:
+            st2 = dop853_step(rhs, sig, z, ev[0] - sig, p, K, ys, znew, stats)
+            if st2 != 0:
+                if st2 > 0:
+                    stats[ST_RHS_STATUS] = st2
+                    return RHS_FAILED_STATUS, sig, h, k, sig_max
+                return NON_FINITE_STATUS, sig, h, k, sig_max
+            out_sig[k] = ev[0]
+            out_z[k, :] = znew
+            k += 1
+        elif st == OK_STATUS:
+            sig_max += TWO_PI  # the Kepler prediction of the output sigma was short
+        else:
+            return st, sig, h, k, sig_max
+    return OK_STATUS, sig, h, k, sig_max
 
 
 # ------------------------------------------------------------------------------------------------
@@ -406,14 +485,93 @@ def integrate_sigma(method, p_ext, r0_m, v0_m_s, t_out, rtol, atol, mu, length_m
     """Sigma form for a point mass, with the state reported at the physical times ``t_out`` (s).
 
     Returns an IntegrationResult with Cartesian rows [r, v] (m, m/s) at ``t_out``.  ``atol`` is in
-    the units of the non-dimensional state (a scalar).  See the module docstring for the method.
+    the units of the non-dimensional state (a scalar).  DOP853 finds the output sigmas in its
+    compiled loop (:func:`_integrate_sigma_clock`); the other methods use the sigma grid and a
+    Newton search (:func:`_integrate_sigma_grid`).  See the module docstring.
     """
-    from ..integrators.driver import IntegrationResult, integrate
-
-    L, T = units(mu, length_m)
     tt = np.asarray(t_out, float)
     if tt.ndim != 1 or tt.size == 0 or np.any(np.diff(tt) < 0) or tt[0] < 0:
         raise ValueError(f"t_out: expected non-decreasing times >= 0 s; got {tt!r}")
+    if method == "dop853":
+        return _integrate_sigma_clock(p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0,
+                                      max_steps, progress)  # fmt: skip
+    return _integrate_sigma_grid(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0,
+                                 max_steps, progress, grid_per_rev)  # fmt: skip
+
+
+#: Accepted steps per call of the compiled clock loop: progress is reported between calls.
+CLOCK_CHUNK_STEPS = 200_000
+
+
+def _integrate_sigma_clock(p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0, max_steps,
+                           progress):  # fmt: skip
+    """DOP853 in sigma with the output times found inside the compiled loop (:func:`_clock_run`).
+
+    Each output row comes from one extra DOP853 step, from the start of the step in which tau
+    crosses tau_k to the sigma located on that step's dense output; the main integration then
+    goes on from that step's start, so the trajectory does not depend on the output times.  The
+    small residual g = t_k - t(sigma_k) (the located sigma's bracket, and the interpolant's error
+    in tau) is stepped over with the Kepler acceleration: r + v g + a g^2/2, v + a g.
+    """
+    import time
+
+    from ..integrators.dop853 import ST_ACCEPTED, ST_NJAC, ST_NLU, ST_NRHS, ST_REJECTED
+    from ..integrators.driver import IntegrationResult, status_message, warm_up
+
+    L, T = units(mu, length_m)
+    el0 = cartesian_to_dromo(r0_m, v0_m_s, mu, length_m, sigma0)
+    z = np.concatenate([[0.0], el0])
+    atol_v = np.full(8, float(atol))
+    targets = tt / T
+    # a sigma bound past the last output (extended by a revolution whenever it is reached first)
+    sig_max = predicted_sigma(el0, sigma0, float(tt[-1]), T) + 0.25 * TWO_PI
+    m = tt.size
+    out_sig = np.empty(m)
+    out_z = np.empty((m, 8))
+    stats = np.zeros(8, dtype=np.int64)
+    compile_s = warm_up("dop853", dromo_sigma_rhs, 8, p_ext)
+    t0 = time.perf_counter()
+    sig, h, k, budget, status = float(sigma0), 0.0, 0, int(max_steps), OK_STATUS
+    while k < m:
+        acc = int(stats[ST_ACCEPTED])
+        status, sig, h, k, sig_max = _clock_run(dromo_sigma_rhs, dromo_clock_event, sig, z, h, targets,
+                                                k, p_ext, float(rtol), atol_v, sig_max,
+                                                min(CLOCK_CHUNK_STEPS, budget), out_sig, out_z, stats)  # fmt: skip
+        budget -= int(stats[ST_ACCEPTED]) - acc
+        if progress is not None:
+            progress(float(z[0] * T))
+        if status != OK_STATUS and (status != MAX_STEPS_STATUS or budget <= 0):
+            break
+    wall = time.perf_counter() - t0
+    rows = []
+    for j in range(k):
+        r, v = dromo_to_cartesian(float(out_sig[j]), out_z[j, 1:8], mu, length_m)
+        g = float(tt[j] - out_z[j, 0] * T)
+        a = -mu * r / float(r @ r) ** 1.5
+        rows.append(np.concatenate([r + v * g + 0.5 * a * g * g, v + a * g]))
+    Y = np.array(rows).reshape(k, 6)
+    st = {"n_accepted": int(stats[ST_ACCEPTED]), "n_rejected": int(stats[ST_REJECTED]),
+          "n_rhs": int(stats[ST_NRHS]), "n_jac": int(stats[ST_NJAC]), "n_lu": int(stats[ST_NLU]),
+          "wall_s": wall, "compile_s": compile_s, "sigma_end": float(sig),
+          "time_residual_max_s": float(np.max(np.abs(tt[:k] - out_z[:k, 0] * T))) if k else 0.0}  # fmt: skip
+    if k == m:
+        status, message = 0, f"reached t={tt[-1]!r} (sigma form, sigma={out_sig[-1]:.6f})"
+    else:
+        message = status_message(int(status), float(z[0] * T), h, int(stats[5]), 0, int(max_steps))
+        message += f" (sigma form: sigma={sig!r}, t={z[0] * T!r} s)"
+    r_end, v_end = dromo_to_cartesian(float(sig), z[1:8], mu, length_m)
+    return IntegrationResult(t=tt[:k].copy(), y=Y, status=int(status), message=message,
+                             t_end=float(tt[k - 1]) if k else 0.0,
+                             y_end=np.concatenate([r_end, v_end]), stats=st)  # fmt: skip
+
+
+def _integrate_sigma_grid(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0,
+                          max_steps, progress, grid_per_rev):  # fmt: skip
+    """Sigma form by a sigma grid and a Newton search on t(sigma) for each output time (any
+    method; the module docstring)."""
+    from ..integrators.driver import IntegrationResult, integrate
+
+    L, T = units(mu, length_m)
     el0 = cartesian_to_dromo(r0_m, v0_m_s, mu, length_m, sigma0)
     z0 = np.concatenate([[0.0], el0])
     atol_v = np.full(8, float(atol))

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tetherlab._jit import njit
+from tetherlab._jit import njit, ptr, row_ptr
 
 from .tableau import DOP_A, DOP_B, DOP_C, DOP_D, DOP_E3, DOP_E5
 
@@ -113,7 +113,7 @@ def hinit(rhs, t, y, f0, p, rtol, atol, iord, h_cap, y1, f1, stats):
     h = min(h, h_cap)
     for i in range(n):
         y1[i] = y[i] + h * f0[i]
-    st = rhs(t + h, y1.ctypes, f1.ctypes, p.ctypes)
+    st = rhs(t + h, ptr(y1), ptr(f1), ptr(p))
     stats[ST_NRHS] += 1
     if st != 0:
         stats[ST_RHS_STATUS] = st
@@ -147,11 +147,38 @@ def _dop_stages(rhs, t, y, h, p, K, ys, stats):
             if a != 0.0:
                 for i in range(n):
                     ys[i] += a * K[j, i]
-        st = rhs(t + _C[s] * h, ys.ctypes, K[s].ctypes, p.ctypes)
+        st = rhs(t + _C[s] * h, ptr(ys), row_ptr(K, s), ptr(p))
         stats[ST_NRHS] += 1
         if st != 0:
             return st
     return 0
+
+
+@njit(cache=True)
+def _dop_combine(y, K, h, y_new):
+    """The 8th-order solution y + h sum_j b_j K[j] (b_12.. are zero)."""
+    for i in range(y.shape[0]):
+        acc = 0.0
+        for j in range(12):
+            acc += _B[j] * K[j, i]
+        y_new[i] = y[i] + h * acc
+
+
+@njit(cache=True)
+def dop853_step(rhs, t, y, h, p, K, ys, y_new, stats):
+    """One DOP853 step of size h from (t, y) into y_new, without error control: for a caller
+    that lands exactly on a point inside a step the error control already accepted (so its error
+    is within tolerance).  K (16, n) and ys (n,) are workspaces.  Returns the first nonzero rhs
+    status, -1 for non-finite values, or 0."""
+    st = rhs(t, ptr(y), row_ptr(K, 0), ptr(p))
+    stats[ST_NRHS] += 1
+    if st != 0:
+        return st
+    st = _dop_stages(rhs, t, y, h, p, K, ys, stats)
+    if st != 0:
+        return st
+    _dop_combine(y, K, h, y_new)
+    return 0 if all_finite(y_new) else -1
 
 
 @njit(cache=True)
@@ -188,7 +215,7 @@ def _dop_dense_stages(rhs, t, y, h, p, K, ys, stats):
             if a != 0.0:
                 for i in range(n):
                     ys[i] += a * K[j, i]
-        st = rhs(t + _C[s] * h, ys.ctypes, K[s].ctypes, p.ctypes)
+        st = rhs(t + _C[s] * h, ptr(ys), row_ptr(K, s), ptr(p))
         stats[ST_NRHS] += 1
         if st != 0:
             return st
@@ -249,7 +276,7 @@ def start_events(event, t, y, p, ne, ev, stats):
     gtmp = np.zeros(max(ne, 1))
     st = 0
     if ne > 0:
-        st = event(t, y.ctypes, gold.ctypes, p.ctypes)
+        st = event(t, ptr(y), ptr(gold), ptr(p))
         if st != 0:
             stats[ST_RHS_STATUS] = st
         else:
@@ -318,7 +345,7 @@ def dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, sta
     y_new = np.empty(n)
     F = np.empty((7, n))
 
-    st = rhs(t, y.ctypes, K[0].ctypes, p.ctypes)
+    st = rhs(t, ptr(y), row_ptr(K, 0), ptr(p))
     stats[ST_NRHS] += 1
     if st != 0:
         stats[ST_RHS_STATUS] = st
@@ -362,11 +389,7 @@ def dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, sta
             stats[ST_RHS_STATUS] = st
             fail = RHS_FAILED
         else:
-            for i in range(n):
-                acc = 0.0
-                for j in range(12):
-                    acc += _B[j] * K[j, i]
-                y_new[i] = y[i] + h * acc
+            _dop_combine(y, K, h, y_new)
             if fixed_step:
                 err = 0.0
                 if not all_finite(y_new):
@@ -379,7 +402,7 @@ def dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, sta
             # Every evaluation the step needs happens before it is committed, so a failure in
             # f(t+h, y_new) or in a dense-output stage rejects the step instead of leaving an
             # accepted state that cannot be continued.
-            st = rhs(t + h, y_new.ctypes, K[12].ctypes, p.ctypes)
+            st = rhs(t + h, ptr(y_new), row_ptr(K, 12), ptr(p))
             stats[ST_NRHS] += 1
             if st != 0:
                 stats[ST_RHS_STATUS] = st
@@ -428,7 +451,7 @@ def dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, sta
 
         # ---- events (before anything is committed) ----
         if ne > 0:
-            st = event(t_new, y_new.ctypes, gnew.ctypes, p.ctypes)
+            st = event(t_new, ptr(y_new), ptr(gnew), ptr(p))
             if st != 0:
                 stats[ST_RHS_STATUS] = st
                 return RHS_FAILED, t, h, n_done
@@ -453,7 +476,7 @@ def dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, sta
                             break
                         mid = 0.5 * (a + b)
                         _dop_dense_eval(y, F, mid, ys)
-                        st = event(t + mid * h, ys.ctypes, gtmp.ctypes, p.ctypes)
+                        st = event(t + mid * h, ptr(ys), ptr(gtmp), ptr(p))
                         if st != 0:
                             stats[ST_RHS_STATUS] = st
                             return RHS_FAILED, t, h, n_done

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tetherlab._jit import njit
+from tetherlab._jit import njit, ptr, row_ptr
 
 from .dop853 import (
     EPS,
@@ -220,12 +220,12 @@ def _jacobian(rhs, t, y, f0, p, fjac, tmp, stats):
         ysafe = y[j]
         delt = np.sqrt(EPS * max(1e-5, abs(ysafe)))
         y[j] = ysafe + delt
-        st = rhs(t, y.ctypes, tmp.ctypes, p.ctypes)
+        st = rhs(t, ptr(y), ptr(tmp), ptr(p))
         stats[ST_NRHS] += 1
         if st != 0:
             delt = -delt
             y[j] = ysafe + delt
-            st = rhs(t, y.ctypes, tmp.ctypes, p.ctypes)
+            st = rhs(t, ptr(y), ptr(tmp), ptr(p))
             stats[ST_NRHS] += 1
         y[j] = ysafe
         if st != 0:
@@ -364,7 +364,7 @@ def radau5_core(
         return RHS_FAILED, t, h, n_done
 
     if not (resume and is_[_I_STARTED] != 0):
-        st = rhs(t, y.ctypes, f0.ctypes, p.ctypes)
+        st = rhs(t, ptr(y), ptr(f0), ptr(p))
         stats[ST_NRHS] += 1
         if st != 0:
             stats[ST_RHS_STATUS] = st
@@ -505,15 +505,15 @@ def radau5_core(
             # Stage values y + z_k -> f, written back into z_k.
             for i in range(n):
                 tmp[i] = y[i] + z1[i]
-            st = rhs(t + C1 * h, tmp.ctypes, z1.ctypes, p.ctypes)
+            st = rhs(t + C1 * h, ptr(tmp), ptr(z1), ptr(p))
             if st == 0:
                 for i in range(n):
                     tmp[i] = y[i] + z2[i]
-                st = rhs(t + C2 * h, tmp.ctypes, z2.ctypes, p.ctypes)
+                st = rhs(t + C2 * h, ptr(tmp), ptr(z2), ptr(p))
                 if st == 0:
                     for i in range(n):
                         tmp[i] = y[i] + z3[i]
-                    st = rhs(xph, tmp.ctypes, z3.ctypes, p.ctypes)
+                    st = rhs(xph, ptr(tmp), ptr(z3), ptr(p))
                     stats[ST_NRHS] += 3
                 else:
                     stats[ST_NRHS] += 2
@@ -627,7 +627,7 @@ def radau5_core(
                 # estimate is unbounded for very stiff components (Hairer & Wanner IV.8).
                 for i in range(n):
                     tmp[i] = y[i] + tmp[i]
-                st = rhs(t, tmp.ctypes, f1.ctypes, p.ctypes)
+                st = rhs(t, ptr(tmp), ptr(f1), ptr(p))
                 stats[ST_NRHS] += 1
                 if st == 0 and all_finite(f1):
                     for i in range(n):
@@ -660,7 +660,7 @@ def radau5_core(
             # if the model fails there the step is rejected, not half-accepted.
             for i in range(n):
                 tmp[i] = y[i] + z3[i]
-            st = rhs(xph, tmp.ctypes, f1.ctypes, p.ctypes)
+            st = rhs(xph, ptr(tmp), ptr(f1), ptr(p))
             stats[ST_NRHS] += 1
             fail = 0
             if st != 0:
@@ -686,7 +686,7 @@ def radau5_core(
 
             # ---------------------------------------------- events (nothing committed yet)
             if ne > 0:
-                st = event(xph, tmp.ctypes, gnew.ctypes, p.ctypes)
+                st = event(xph, ptr(tmp), ptr(gnew), ptr(p))
                 if st != 0:
                     stats[ST_RHS_STATUS] = st
                     status = RHS_FAILED
@@ -709,7 +709,7 @@ def radau5_core(
                                 f2[i] = evc[0, i] + sm * (
                                     evc[1, i] + (sm - C2M1) * (evc[2, i] + (sm - C1M1) * evc[3, i])
                                 )
-                            st = event(xph + sm * h, f2.ctypes, gtmp.ctypes, p.ctypes)
+                            st = event(xph + sm * h, ptr(f2), ptr(gtmp), ptr(p))
                             if st != 0:
                                 break
                             if (gtmp[k] < 0.0) == (gold[k] < 0.0):

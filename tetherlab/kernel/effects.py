@@ -29,6 +29,20 @@ from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_CNT, H_OFF_EFF
 
 @njit(cache=True)
 def body_force(p, t, body, x, y, z, vx, vy, vz, mass):
+    """Total force (N) on point mass ``body`` from every effect the scene names."""
+    return _body_force(p, t, body, x, y, z, vx, vy, vz, mass, True)
+
+
+@njit(cache=True)
+def perturbing_body_force(p, t, body, x, y, z, vx, vy, vz, mass):
+    """As :func:`body_force` without central gravity: for formulations that integrate the Kepler
+    motion analytically (DROMO), so it is neither computed nor subtracted again (which would
+    also cancel about log10(mu/(r^2 a_p)) digits of the perturbation)."""
+    return _body_force(p, t, body, x, y, z, vx, vy, vz, mass, False)
+
+
+@njit(cache=True)
+def _body_force(p, t, body, x, y, z, vx, vy, vz, mass, central):
     neff = int(p[H_NEFF])
     off = int(p[H_OFF_EFF])
     cnt = int(p[H_OFF_CNT])
@@ -38,13 +52,16 @@ def body_force(p, t, body, x, y, z, vx, vy, vz, mass):
     for e in range(neff):
         code = int(p[off + e * ET_SIZE + ET_CODE])
         par = int(p[off + e * ET_SIZE + ET_OFF_PAR])
-        p[cnt + code] += 1.0
         if code == central_gravity.CODE:
+            if not central:
+                continue
+            p[cnt + code] += 1.0
             ax, ay, az = central_gravity.accel(p[par], x, y, z)
             fx += mass * ax
             fy += mass * ay
             fz += mass * az
         else:
+            p[cnt + code] += 1.0
             ax, ay, az = _other_body(p, code, par, t, body, x, y, z, vx, vy, vz, mass)
             fx += ax
             fy += ay
