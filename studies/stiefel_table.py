@@ -85,8 +85,9 @@ def write(outdir: Path, table: list[dict]) -> None:
     for tol in wide_err.index:
         cells = [f"{wide_err.loc[tol, c]:.3g} / {wide_steps.loc[tol, c]:.0f}" for c in wide_err.columns]
         lines.append(f"| {tol:.0e} | " + " | ".join(cells) + " |")
-    lines += ["", "![stiefel](stiefel_table.png)", "", "DROMO: sigma form; steps are the sigma pass (the final-time search adds a few dozen steps, "
-              "column search_steps of the CSV).", "", footer(), ""]  # fmt: skip
+    lines += ["", "![stiefel](stiefel_table.png)", "", "DROMO: sigma form; steps are the sigma pass.  The output search adds to it (column "
+              "search_steps of the CSV): with DOP853 one landing step per output (an event on tau in the "
+              "compiled loop), with RADAU5 a Newton search of a few dozen steps.", "", footer(), ""]  # fmt: skip
     (outdir / "stiefel_table.md").write_text("\n".join(lines))
 
     import matplotlib

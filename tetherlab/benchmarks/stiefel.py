@@ -8,7 +8,8 @@ tetherlab wall time / heyoka wall time (< 1: tetherlab is faster).
 
 Excluded from the timings, for both: compilation.  tetherlab: the numba kernels are loaded or
 compiled, and a warm-up run is made, before timing; the time covers the driver call (validation,
-the compiled step loop, and for DROMO the sigma grid pass and the time search).  heyoka: the
+set-up, the compiled step loop -- for DROMO with DOP853 the output times are found inside it --
+and the conversion of the outputs).  heyoka: the
 ``taylor_adaptive`` construction (where heyoka JIT-compiles its Taylor integrator) is excluded;
 the time covers ``propagate_until`` alone, after resetting time and state.
 

@@ -553,6 +553,8 @@ def _integrate_sigma_clock(p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, si
     st = {"n_accepted": int(stats[ST_ACCEPTED]), "n_rejected": int(stats[ST_REJECTED]),
           "n_rhs": int(stats[ST_NRHS]), "n_jac": int(stats[ST_NJAC]), "n_lu": int(stats[ST_NLU]),
           "wall_s": wall, "compile_s": compile_s, "sigma_end": float(sig),
+          # the landing steps, one per output after the start (their rhs calls are in n_rhs)
+          "search_n_accepted": int(np.count_nonzero(out_sig[:k] != sigma0)),
           "time_residual_max_s": float(np.max(np.abs(tt[:k] - out_z[:k, 0] * T))) if k else 0.0}  # fmt: skip
     if k == m:
         status, message = 0, f"reached t={tt[-1]!r} (sigma form, sigma={out_sig[-1]:.6f})"
