@@ -344,22 +344,31 @@ def cartesian_to_dromo(r_m, v_m_s, mu_m3_s2: float, length_m: float, sigma0: flo
     defined for e = 0).  Needs h != 0 (sheet s8).
     """
     L, T = units(mu_m3_s2, length_m)
-    r = np.asarray(r_m, float) / L
-    v = np.asarray(v_m_s, float) / (L / T)
-    hv = np.cross(r, v)
-    h = math.sqrt(float(hv @ hv))
-    rr = math.sqrt(float(r @ r))
+    # plain floats: np.cross on 3-vectors costs ~10 us a call, and this runs once per integration
+    rx, ry, rz = (float(a) / L for a in r_m)
+    vs = L / T
+    vx, vy, vz = (float(a) / vs for a in v_m_s)
+    hx, hy, hz = _cross(rx, ry, rz, vx, vy, vz)
+    h = math.sqrt(hx * hx + hy * hy + hz * hz)
+    rr = math.sqrt(rx * rx + ry * ry + rz * rz)
     if not (h > 0.0 and rr > 0.0):
         raise ValueError(f"DROMO needs a non-zero angular momentum and radius; got |h|={h!r}, |r|={rr!r} (units L, T)")
-    i = r / rr
-    k = hv / h
-    j = np.cross(k, i)
-    e = np.cross(v, hv) - i
-    c, s = math.cos(sigma0), math.sin(sigma0)
-    x = c * i - s * j
-    y = s * i + c * j
-    R = np.column_stack([x, y, k])
-    return np.concatenate([[e @ x, e @ y, 1.0 / h], quaternion_from_frame(R)])
+    i = (rx / rr, ry / rr, rz / rr)
+    k = (hx / h, hy / h, hz / h)
+    j = _cross(*k, *i)
+    vh = _cross(vx, vy, vz, hx, hy, hz)
+    e = [vh[a] - i[a] for a in range(3)]
+    c, sn = math.cos(sigma0), math.sin(sigma0)
+    x = [c * i[a] - sn * j[a] for a in range(3)]
+    y = [sn * i[a] + c * j[a] for a in range(3)]
+    R = np.array([[x[a], y[a], k[a]] for a in range(3)])
+    q1 = e[0] * x[0] + e[1] * x[1] + e[2] * x[2]
+    q2 = e[0] * y[0] + e[1] * y[1] + e[2] * y[2]
+    return np.concatenate([[q1, q2, 1.0 / h], quaternion_from_frame(R)])
+
+
+def _cross(ax, ay, az, bx, by, bz):
+    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
 def dromo_to_cartesian(sigma: float, elements, mu_m3_s2: float, length_m: float) -> tuple[np.ndarray, np.ndarray]:
