@@ -55,14 +55,14 @@ def analyse(case, res):
             observed_order(vals[i - 2], vals[i - 1], vals[i], ns[i] / ns[i - 1]) for i in range(2, len(ns))
         ]
         out.append({"quantity": q, "ns": ns, "values": vals, "local_orders": local, **est,
-                    "wall_s": [r.summary.get("wall_s", math.nan) for r in ok]})
+                    "wall_s": [r.wall_s for r in ok]})  # the whole run in its worker: set-up, integration, summary
     return out
 
 
 def quantity_table(case, a) -> list[str]:
     """Markdown table of one quantity against n: value, difference to the previous count, the
     order from the last three counts, wall time."""
-    lines = [f"`{case.id}`: {a['quantity']}", "",
+    lines = [f"`{a['quantity']}`", "",
              "| n | value | a_n - a_n/2 | order from n/4, n/2, n | wall (s) |", "|---|---|---|---|---|"]
     for i, (n, v, p, w) in enumerate(zip(a["ns"], a["values"], a["local_orders"], a["wall_s"])):
         diff = f"{v - a['values'][i - 1]:.3g}" if i > 0 else ""
@@ -131,6 +131,7 @@ def main(argv=None) -> int:
         figure(case, analysis, out / f"convergence-{case.id}.png")
         for r in res.failed:
             failures.append(f"- {case.id}, {r.label}: `{r.error}`")
+        sections += [f"### {case.id}", "", case.description + ".", ""]
         for a in analysis:
             md.append(f"| {case.id} | {a['quantity']} | {', '.join(map(str, a['ns'][-3:]))} | "
                       f"{a['limit']:.13g} | {a['order']:.3f} | {a['error_estimate']:.3g} |")
