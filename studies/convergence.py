@@ -62,7 +62,7 @@ def analyse(case, res):
 def quantity_table(case, a) -> list[str]:
     """Markdown table of one quantity against n: value, difference to the previous count, the
     order from the last three counts, wall time."""
-    lines = [f"`{a['quantity']}`", "",
+    lines = [f"{a['quantity']} against n:", "",
              "| n | value | a_n - a_n/2 | order from n/4, n/2, n | wall (s) |", "|---|---|---|---|---|"]
     for i, (n, v, p, w) in enumerate(zip(a["ns"], a["values"], a["local_orders"], a["wall_s"])):
         diff = f"{v - a['values'][i - 1]:.3g}" if i > 0 else ""
@@ -141,7 +141,8 @@ def main(argv=None) -> int:
     (out / "convergence.csv").write_text("case,quantity,rods,value,order_from_last_three,richardson_estimate,"
                                          "observed_order,wall_s\n" + "\n".join(table) + "\n")
     md += ["", *sections, f"Study wall time {wall:.0f} s (runs cached in the output's cache/ are not rerun).", "",
-           "Figures: " + ", ".join(f"![{c.id}](convergence-{c.id}.png)" for c in study.cases), ""]
+           "Figures (|value - Richardson estimate| against n):", "",
+           *(f"![{c.id}](convergence-{c.id}.png)" for c in study.cases), ""]
     if failures:
         md += ["Failed runs (kept in the per-case CSV with their message):", ""] + failures + [""]
     (out / "convergence.md").write_text("\n".join(md))
