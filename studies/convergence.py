@@ -4,9 +4,12 @@
 
 For each case and quantity: the values against n, the Richardson estimate of the converged
 value and the observed order from the three finest successful points (tetherlab.richardson),
-|a_n - estimate| on a log-log figure, a CSV per case (every run, with its cost and any error)
-and a Markdown section (OUTDIR/convergence.md).  Runs are cached in OUTDIR/cache: an interrupted
-study resumes.  Failed runs are listed with their message, never dropped silently.
+the order from every three consecutive counts, |a_n - estimate| on a log-log figure, a CSV per
+case (every run, with its cost and any error), OUTDIR/convergence.csv (every value) and a
+Markdown section (OUTDIR/convergence.md).  All cases go through one pool of workers, largest rod
+counts first.  Runs are cached in OUTDIR/cache: an interrupted study resumes.  Failed runs are
+listed with their message, never dropped silently.  The run settings of each case, and the
+measurements that justify them, are in studies/convergence.toml.
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ def first_lateral_shape(base, point):
 
 def analyse(case, res):
     """Rows of the convergence table for every quantity of one case."""
-    from tetherlab.richardson import richardson
+    from tetherlab.richardson import observed_order, richardson
 
     ok = sorted((r for r in res.records if r.ok), key=lambda r: r.params[ROD_KEY])
     out = []
@@ -46,9 +49,26 @@ def analyse(case, res):
         vals = [r.summary[q] for r in ok]
         est = richardson(ns, vals) if len(ns) >= 3 else {"order": math.nan, "limit": math.nan,
                                                           "error_estimate": math.nan}
-        out.append({"quantity": q, "ns": ns, "values": vals, **est,
-                    "wall_s": [r.summary.get("wall_s", math.nan) for r in ok]})
+        # the order from every three consecutive counts (NaN for the first two): shows where the
+        # sequence enters its asymptotic range, and where it leaves it for round-off
+        local = [math.nan, math.nan][: len(ns)] + [
+            observed_order(vals[i - 2], vals[i - 1], vals[i], ns[i] / ns[i - 1]) for i in range(2, len(ns))
+        ]
+        out.append({"quantity": q, "ns": ns, "values": vals, "local_orders": local, **est,
+                    "wall_s": [r.wall_s for r in ok]})  # the whole run in its worker: set-up, integration, summary
     return out
+
+
+def quantity_table(case, a) -> list[str]:
+    """Markdown table of one quantity against n: value, difference to the previous count, the
+    order from the last three counts, wall time."""
+    lines = [f"{a['quantity']} against n:", "",
+             "| n | value | a_n - a_n/2 | order from n/4, n/2, n | wall (s) |", "|---|---|---|---|---|"]
+    for i, (n, v, p, w) in enumerate(zip(a["ns"], a["values"], a["local_orders"], a["wall_s"])):
+        diff = f"{v - a['values'][i - 1]:.3g}" if i > 0 else ""
+        order = f"{p:.3f}" if math.isfinite(p) else ("" if i < 2 else "NaN")
+        lines.append(f"| {n} | {v:.13g} | {diff} | {order} | {w:.3g} |")
+    return lines + [""]
 
 
 def figure(case, analysis, path):
@@ -76,7 +96,9 @@ def figure(case, analysis, path):
 
 
 def main(argv=None) -> int:
-    from tetherlab.sweep import load_study, run_case
+    import time
+
+    from tetherlab.sweep import load_study, run_cases
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out", help="output directory")
@@ -89,32 +111,38 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     study = load_study(HERE / "convergence.toml")
     max_rods = args.max_rods or int(study.options.get("max_rods", 64))
+    t0 = time.perf_counter()
+    # Every case through one pool, largest rod counts first: the n = 64 libration run takes most
+    # of the study's time, and the other runs fill the other workers meanwhile.
+    results = run_cases(study, None, out, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet,
+                        filter_point=lambda case, p: p[ROD_KEY] <= max_rods, first=lambda case, p: p[ROD_KEY])
+    wall = time.perf_counter() - t0
     md = [f"## Rod-count convergence (n <= {max_rods})", "", study.description, "",
           "Richardson estimate and observed order p from the three finest successful points "
-          "(tetherlab/richardson.py); 'NaN' when those points do not converge monotonically.", "",
-          "| case | quantity | n | values | estimate | p | error estimate of finest | wall per run (s) |",
-          "|---|---|---|---|---|---|---|---|"]
-    failures = []
-    table = []
+          "(tetherlab/richardson.py); 'NaN' when those points do not converge monotonically.  The "
+          "tables below give the order from every three consecutive counts.  Why each case runs as it "
+          "does (start, tolerance, duration), with the measurements behind it: studies/convergence.toml.",
+          "", "| case | quantity | finest n | Richardson estimate | p | error estimate of finest |",
+          "|---|---|---|---|---|---|"]
+    failures, table, sections = [], [], []
     for case in study.cases:
-        res = run_case(study, case, out, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet,
-                       filter_point=lambda p: p[ROD_KEY] <= max_rods)
+        res = results[case.id]
         analysis = analyse(case, res)
         figure(case, analysis, out / f"convergence-{case.id}.png")
         for r in res.failed:
             failures.append(f"- {case.id}, {r.label}: `{r.error}`")
+        sections += [f"### {case.id}", "", case.description + ".", ""]
         for a in analysis:
-            md.append(
-                f"| {case.id} | {a['quantity']} | {', '.join(map(str, a['ns']))} | "
-                f"{', '.join(f'{v:.10g}' for v in a['values'])} | {a['limit']:.10g} | {a['order']:.3g} | "
-                f"{a['error_estimate']:.3g} | {', '.join(f'{w:.3g}' for w in a['wall_s'])} |"
-            )
-            for n, v, w in zip(a["ns"], a["values"], a["wall_s"]):
-                table.append(f"{case.id},{a['quantity']},{n},{v!r},{a['limit']!r},{a['order']!r},{w!r}")
-        md += []
-    (out / "convergence.csv").write_text("case,quantity,rods,value,richardson_estimate,observed_order,wall_s\n"
-                                         + "\n".join(table) + "\n")
-    md += ["", "Figures: " + ", ".join(f"![{c.id}](convergence-{c.id}.png)" for c in study.cases), ""]
+            md.append(f"| {case.id} | {a['quantity']} | {', '.join(map(str, a['ns'][-3:]))} | "
+                      f"{a['limit']:.13g} | {a['order']:.3f} | {a['error_estimate']:.3g} |")
+            sections += quantity_table(case, a)
+            for n, v, p, w in zip(a["ns"], a["values"], a["local_orders"], a["wall_s"]):
+                table.append(f"{case.id},{a['quantity']},{n},{v!r},{p!r},{a['limit']!r},{a['order']!r},{w!r}")
+    (out / "convergence.csv").write_text("case,quantity,rods,value,order_from_last_three,richardson_estimate,"
+                                         "observed_order,wall_s\n" + "\n".join(table) + "\n")
+    md += ["", *sections, f"Study wall time {wall:.0f} s (runs cached in the output's cache/ are not rerun).", "",
+           "Figures (|value - Richardson estimate| against n):", "",
+           *(f"![{c.id}](convergence-{c.id}.png)" for c in study.cases), ""]
     if failures:
         md += ["Failed runs (kept in the per-case CSV with their message):", ""] + failures + [""]
     (out / "convergence.md").write_text("\n".join(md))

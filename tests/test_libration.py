@@ -67,3 +67,23 @@ def test_local_vertical_is_a_relative_equilibrium(rods):
     assert np.max(np.abs(d["main.theta_rad"])) < 1e-6
     assert np.max(np.abs(d["main.phi_rad"])) < 1e-6
     assert d["t_s"].iloc[-1] == pytest.approx(10 * 2 * math.pi * math.sqrt(d["com_radius_m"].iloc[0] ** 3 / MU_EARTH), rel=1e-6)
+
+
+def test_smoothed_zero_crossings_ignore_a_faster_oscillation():
+    # A libration-like signal, odd about its crossings (fundamental and third harmonic, period
+    # 3927 s as on the convergence scene), sampled as 3001 outputs over 3 orbits.  A ripple of
+    # 1e-4 of its amplitude at 450 s (where the lateral modes ride on theta) shifts the raw
+    # estimate by 1.5e-6; smoothed over 1/12 of the period it is back at the clean signal's
+    # 1e-9 (the linear interpolation between samples).
+    w = 2 * math.pi / 3927.0
+    t = np.linspace(0.0, 19000.0, 3001)
+    clean = np.sin(w * t + 0.2) + 0.1 * np.sin(3 * (w * t + 0.2))
+    x = clean + 1e-4 * np.sin(2 * math.pi * t / 450.0 + 0.3)
+    smooth = 3927.0 / 12
+    assert abs(zero_crossing_frequency(t, x) / w - 1) > 1e-6
+    assert abs(zero_crossing_frequency(t, x, smooth_s=smooth) / w - 1) < 3e-9
+    assert abs(zero_crossing_frequency(t, clean, smooth_s=smooth) / w - 1) < 3e-9
+    with pytest.raises(ValueError, match="uniformly spaced"):
+        zero_crossing_frequency(t**1.01, x, smooth_s=smooth)
+    with pytest.raises(ValueError, match="smooth_s"):
+        zero_crossing_frequency(t, x, smooth_s=-1.0)

@@ -9,7 +9,7 @@ import math
 import pytest
 
 from tetherlab.scene import Scene
-from tetherlab.sweep import load_study, run_sweep, scene_hash
+from tetherlab.sweep import load_study, run_case, run_cases, run_sweep, scene_hash
 
 # A tether-free Keplerian orbit: cheap (a fraction of an orbit, dop853), so the sweep machinery is
 # what is tested.  The summary is compared against the two-body radius, which is conserved on a
@@ -32,6 +32,16 @@ def orbit_radius(scene) -> dict:
     ts = simulate(scene, progress=False).timeseries
     r = math.sqrt(sum(ts[f"sat.{a}_m"].iloc[-1] ** 2 for a in "xyz"))
     return {"radius_m": r, "a_m": scene.bodies[0].elements.a_m}
+
+
+STARTED: list[float] = []  # semi-major axes (m) in the order orbit_period started (workers=1: this process)
+
+
+def orbit_period(scene) -> dict:
+    """Keplerian period (s) of the body 'sat', without a run; logs the start order."""
+    a = scene.bodies[0].elements.a_m
+    STARTED.append(a)
+    return {"period_s": 2 * math.pi * math.sqrt(a**3 / scene.central_body.mu_m3_s2)}
 
 
 def failing_summary(scene) -> dict:
@@ -125,3 +135,44 @@ def test_study_file_is_read_and_checked(tmp_path):
     study.write_text('name = "t"\n[[case]]\nid = "r"\nscene = "s.toml"\nsummary = 3\n')
     with pytest.raises(ValueError, match="'summary' must be a string"):
         load_study(study)
+
+
+def test_several_cases_run_as_one_sweep_longest_first(tmp_path):
+    scene_file = tmp_path / "s.toml"
+    scene_file.write_text(
+        'name = "s"\nduration = "600 s"\n[central_body]\nname = "earth"\n[effects]\ncentral_gravity = {}\n'
+        '[bodies.sat]\nmass = "1 kg"\nelements = { a = "7000 km", e = 0.0 }\n[output]\ncount = 3\n'
+    )
+    study = tmp_path / "study.toml"
+    study.write_text(
+        'name = "t"\n'
+        '[[case]]\nid = "radius"\nscene = "s.toml"\nsummary = "tests.test_sweep:orbit_radius"\n'
+        '[case.grid]\n"bodies.sat.elements.a" = ["7000 km", "7100 km"]\n'
+        '[[case]]\nid = "period"\nscene = "s.toml"\nsummary = "tests.test_sweep:orbit_period"\n'
+        '[case.grid]\n"bodies.sat.elements.a" = ["7000 km", "7200 km", "7100 km"]\n'
+    )
+    st = load_study(study)
+
+    def km(point):
+        return float(point["bodies.sat.elements.a"].split()[0])
+
+    STARTED.clear()
+    res = run_cases(st, None, tmp_path / "out", workers=1, progress=False, first=lambda case, p: km(p),
+                    filter_point=lambda case, p: case.id != "radius" or km(p) < 7050)
+    # started by decreasing cost estimate across cases; each case's records in its grid order
+    assert STARTED == [7.2e6, 7.1e6, 7.0e6]
+    assert [r.params["bodies.sat.elements.a"] for r in res["period"].records] == ["7000 km", "7200 km", "7100 km"]
+    assert [r.label for r in res["radius"].records] == ["bodies.sat.elements.a=7000 km"]
+    assert abs(res["radius"].records[0].summary["radius_m"] - 7.0e6) < 1e-3
+    assert res["period"].records[1].summary["period_s"] > res["period"].records[2].summary["period_s"]
+    assert (res["period"].n_run, res["radius"].n_run) == (3, 1)
+    assert (tmp_path / "out" / "period.csv").read_text().count("\n") == 4  # header and 3 rows
+    # one case through the same cache: nothing runs again
+    again = run_case(st, st.cases[1], tmp_path / "out", workers=1, progress=False)
+    assert (again.n_run, again.n_cached) == (0, 3)
+    assert [r.summary for r in again.records] == [r.summary for r in res["period"].records]
+
+
+def test_one_summary_per_scene_must_match_the_scenes():
+    with pytest.raises(ValueError, match="one per scene"):
+        run_sweep(scenes((7000, 7100)), [orbit_radius], progress=False)

@@ -23,7 +23,8 @@ machinery (a worker process killed, a cluster gone) is also recorded as failed, 
 so the next call retries it.
 
 Command line: ``python -m tetherlab.sweep STUDY.toml --out DIR [--scheduler tcp://...]
-[--workers N]`` runs a study file (format in :func:`load_study`) and writes ``DIR/<case>.csv``.
+[--workers N]`` runs a study file (format in :func:`load_study`) and writes ``DIR/<case>.csv``;
+all its cases go through one pool (:func:`run_cases`).
 """
 
 from __future__ import annotations
@@ -236,7 +237,7 @@ def _default_workers() -> int:
 
 def run_sweep(
     scenes: Sequence,
-    summary: Callable,
+    summary: Callable | Sequence[Callable],
     *,
     cache_dir: str | Path | None = None,
     scheduler: Any = None,
@@ -250,6 +251,9 @@ def run_sweep(
 ) -> SweepResult:
     """Run ``summary(scene)`` for every scene; return the records in the order of ``scenes``.
 
+    summary: one module-level function for every scene, or a sequence of them, one per scene (the
+        sweeps of several study cases through one pool: :func:`run_cases`).  Runs are started in
+        the order of ``scenes``: put the longest first, so that none starts last on an idle pool.
     scheduler: None (a local process pool of ``workers`` processes, default all cores; with
         ``workers=1`` the runs happen in this process, one after the other), a Dask scheduler
         address (``"tcp://host:8786"``, or ``"inproc://..."`` of a ``LocalCluster(processes=
@@ -259,7 +263,13 @@ def run_sweep(
     """
     t_start = time.perf_counter()
     scenes = list(scenes)
-    sname = summary_name(summary)
+    if callable(summary):
+        summaries = [summary] * len(scenes)
+    else:
+        summaries = list(summary)
+        if len(summaries) != len(scenes):
+            raise ValueError(f"summary: expected one function or {len(scenes)} (one per scene), got {len(summaries)}")
+    snames = [summary_name(f) for f in summaries]
     if labels is not None and len(labels) != len(scenes):
         raise ValueError(f"labels: expected {len(scenes)} labels (one per scene), got {len(labels)}")
     if params is not None and len(params) != len(scenes):
@@ -274,9 +284,9 @@ def run_sweep(
         cache.mkdir(parents=True, exist_ok=True)
 
     records: list[RunRecord | None] = [None] * len(scenes)
-    todo: dict[str, list[int]] = {}  # hash -> indices (duplicates run once)
+    todo: dict[tuple[str, str], list[int]] = {}  # (hash, summary) -> indices (duplicates run once)
     n_cached = 0
-    for i, h in enumerate(hashes):
+    for i, (h, sname) in enumerate(zip(hashes, snames)):
         data = _read_cache(_cache_path(cache, h, sname)) if cache is not None else None
         if data is not None and (data["ok"] or not retry_failed):
             records[i] = RunRecord(h, labels[i], params[i], bool(data["ok"]), dict(data["summary"]),
@@ -285,10 +295,11 @@ def run_sweep(
             if on_record is not None:
                 on_record(records[i])
         else:
-            todo.setdefault(h, []).append(i)
+            todo.setdefault((h, sname), []).append(i)
 
-    def finish(h: str, out: dict, lost: bool = False) -> None:
-        for j, i in enumerate(todo[h]):
+    def finish(key: tuple[str, str], out: dict, lost: bool = False) -> None:
+        h, sname = key
+        for j, i in enumerate(todo[key]):
             rec = RunRecord(h, labels[i], params[i], out["ok"], dict(out["summary"]), out["error"],
                             out["wall_s"], cached=False, lost=lost)
             if j == 0 and cache is not None and not lost:
@@ -297,7 +308,7 @@ def run_sweep(
             if on_record is not None:
                 on_record(rec)
 
-    jobs = [(h, scenes[idx[0]]) for h, idx in todo.items()]
+    jobs = [(key, scenes[idx[0]], summaries[idx[0]]) for key, idx in todo.items()]
     bar = None
     if progress and jobs:
         from tqdm import tqdm
@@ -307,14 +318,14 @@ def run_sweep(
         if not jobs:
             pass
         elif scheduler is not None:
-            _run_dask(jobs, summary, scheduler, finish, bar)
+            _run_dask(jobs, scheduler, finish, bar)
         elif (workers or _default_workers()) == 1 or len(jobs) == 1:
-            for h, scene in jobs:
-                finish(h, run_one(scene, summary))
+            for key, scene, fn in jobs:
+                finish(key, run_one(scene, fn))
                 if bar is not None:
-                    bar.update(len(todo[h]))
+                    bar.update(len(todo[key]))
         else:
-            _run_processes(jobs, summary, workers or _default_workers(), finish, bar)
+            _run_processes(jobs, workers or _default_workers(), finish, bar)
     finally:
         if bar is not None:
             bar.close()
@@ -326,20 +337,20 @@ def _lost(exc: BaseException) -> dict:
     return {"ok": False, "summary": {}, "error": f"lost: {type(exc).__name__}: {exc}", "wall_s": math.nan}
 
 
-def _run_processes(jobs, summary, workers, finish, bar) -> None:
+def _run_processes(jobs, workers, finish, bar) -> None:
     # spawn, not fork: the parent may hold threads (tqdm's monitor, a Dask client) and numba
     # state, neither of which survives a fork safely; children load numba's on-disk cache.
     ctx = multiprocessing.get_context("spawn")
     pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=ctx)
-    futures = {pool.submit(run_one, scene, summary): h for h, scene in jobs}
+    futures = {pool.submit(run_one, scene, fn): key for key, scene, fn in jobs}  # started in this order
     try:
         for fut in cf.as_completed(futures):
-            h = futures[fut]
+            key = futures[fut]
             try:
                 out, lost = fut.result(), False
             except Exception as exc:  # noqa: BLE001 - a dead worker (BrokenProcessPool), a pickling error
                 out, lost = _lost(exc), True
-            finish(h, out, lost)
+            finish(key, out, lost)
             if bar is not None:
                 bar.update(1)
     finally:
@@ -347,22 +358,22 @@ def _run_processes(jobs, summary, workers, finish, bar) -> None:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _run_dask(jobs, summary, scheduler, finish, bar) -> None:
+def _run_dask(jobs, scheduler, finish, bar) -> None:
     from distributed import Client, as_completed
 
     own = not isinstance(scheduler, Client)
     client = Client(scheduler) if own else scheduler
     try:
         # pure=False: the same scene twice in one sweep is already merged above; keys stay unique
-        futures = {client.submit(run_one, scene, summary, pure=False): h for h, scene in jobs}
+        futures = {client.submit(run_one, scene, fn, pure=False): key for key, scene, fn in jobs}
         try:
             for fut in as_completed(list(futures)):
-                h = futures[fut]
+                key = futures[fut]
                 try:
                     out, lost = fut.result(), False
                 except Exception as exc:  # noqa: BLE001 - worker death, lost connection
                     out, lost = _lost(exc), True
-                finish(h, out, lost)
+                finish(key, out, lost)
                 if bar is not None:
                     bar.update(1)
         finally:
@@ -503,26 +514,61 @@ def run_case(
     filter_point: Callable[[dict], bool] | None = None,
 ) -> SweepResult:
     """Run one case of a study, caching under ``out_dir/cache``; writes ``out_dir/<id>.csv``."""
+    keep = None if filter_point is None else (lambda c, p: filter_point(p))
+    return run_cases(study, [case], out_dir, scheduler=scheduler, workers=workers, progress=progress,
+                     filter_point=keep)[case.id]
+
+
+def run_cases(
+    study: Study,
+    cases: Sequence[StudyCase] | None,
+    out_dir: str | Path,
+    *,
+    scheduler: Any = None,
+    workers: int | None = None,
+    progress: bool = True,
+    filter_point: Callable[[StudyCase, dict], bool] | None = None,
+    first: Callable[[StudyCase, dict], float] | None = None,
+) -> dict[str, SweepResult]:
+    """Run several cases of a study (None: all) as one sweep through one pool; returns
+    ``{case id: SweepResult}`` and writes ``out_dir/<id>.csv`` for each, rows in grid order.
+
+    ``first(case, point)``: a cost estimate; runs are started in decreasing order of it, so the
+    longest run of any case starts at once and the others fill the remaining workers (with one
+    pool per case, a case's longest run finishes alone while the other workers idle).
+    ``filter_point(case, point)``: keep only the points for which it is true.
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    scenes, points = case.scenes(study.path.parent)
-    if filter_point is not None:
-        keep = [i for i, p in enumerate(points) if filter_point(p)]
-        scenes, points = [scenes[i] for i in keep], [points[i] for i in keep]
-    labels = [", ".join(f"{k}={v}" for k, v in p.items()) or case.id for p in points]
+    cases = list(study.cases if cases is None else cases)
+    items = []  # (case index, point index in the case, scene, point)
+    for k, case in enumerate(cases):
+        scenes, points = case.scenes(study.path.parent)
+        for j, (sc, pt) in enumerate(zip(scenes, points)):
+            if filter_point is None or filter_point(case, pt):
+                items.append((k, j, sc, pt))
+    if first is not None:
+        items.sort(key=lambda it: -float(first(cases[it[0]], it[3])))  # stable: grid order on ties
+    labels = [", ".join(f"{key}={v}" for key, v in it[3].items()) or cases[it[0]].id for it in items]
     res = run_sweep(
-        scenes,
-        resolve(case.summary),
+        [it[2] for it in items],
+        [resolve(cases[it[0]].summary) for it in items],
         cache_dir=out / "cache",
         scheduler=scheduler,
         workers=workers,
         labels=labels,
-        params=points,
+        params=[it[3] for it in items],
         progress=progress,
-        description=f"{study.name}: {case.id}",
+        description=study.name if len(cases) > 1 else f"{study.name}: {cases[0].id}",
     )
-    res.frame().to_csv(out / f"{case.id}.csv", index=False, float_format="%.17g")
-    return res
+    results = {}
+    for k, case in enumerate(cases):
+        mine = sorted(((it[1], rec) for it, rec in zip(items, res.records) if it[0] == k), key=lambda m: m[0])
+        recs = [rec for _, rec in mine]
+        n_cached = sum(r.cached for r in recs)
+        results[case.id] = SweepResult(recs, n_run=len(recs) - n_cached, n_cached=n_cached, wall_s=res.wall_s)
+        results[case.id].frame().to_csv(out / f"{case.id}.csv", index=False, float_format="%.17g")
+    return results
 
 
 def main(argv: Iterable[str] | None = None) -> int:
@@ -535,8 +581,9 @@ def main(argv: Iterable[str] | None = None) -> int:
     args = ap.parse_args(None if argv is None else list(argv))
     study = load_study(args.study)
     n_failed = 0
+    results = run_cases(study, None, args.out, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
     for case in study.cases:
-        res = run_case(study, case, args.out, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
+        res = results[case.id]
         n_failed += len(res.failed)
         print(f"{case.id}: {len(res.records)} runs ({res.n_run} run now, {res.n_cached} cached), "
               f"{len(res.failed)} failed, {res.wall_s:.1f} s -> {Path(args.out) / (case.id + '.csv')}")
