@@ -1,96 +1,327 @@
-"""Hard cases that must stay numerically stable, each with a stated pass criterion.
+"""Hard cases that must stay numerically stable, each with a derived pass criterion.
 
     PYTHONPATH=. python studies/hard_cases.py OUTDIR [--skip-long] [--scheduler tcp://...] [--workers N]
 
-Every case runs at two tolerances (rtol = atol = TOL_LOOSE and TOL_TIGHT) through tetherlab.sweep
-(parallel, cached in OUTDIR/cache, resumable), with the summary tetherlab.summaries.invariants.
-Pass means, for the tight run (and the loose one for the first check):
-  * no NaN/inf anywhere in the outputs (``nonfinite == 0``);
-  * |H(t) - H(0)| <= H_BOUND * I n: total angular momentum about the Earth's centre, measured in
-    units of the tether's own angular momentum I n (tetherlab.summaries.own_angular_momentum_scale);
-  * for the "energy" tether model (which conserves energy, docs/model.md):
-    |E(t) - E(0)| <= E_BOUND * I n^2;
-  * converging with the tolerance: the final positions of the loose and tight runs agree within
-    the case's ``converge_m`` (metres);
-  * a case outside the model's validity (``expect_error``) must stop with a SimulationError
-    whose message names the failure and the rod, at both tolerances.
-Writes OUTDIR/hard_cases.csv (every run) and OUTDIR/hard_cases.md; exits 1 when a case fails.
-The slack-tether case (tension-only tether with event location; a tether starting slack and
-snapping taut) is SLACK_SLOT below.
+Every case runs on a ladder of three tolerances a decade apart (rtol = atol = tau1 > tau2 > tau3:
+LADDER, or the case's own ``ladder``) through tetherlab.sweep (parallel, cached in OUTDIR/cache,
+resumable), with the summary tetherlab.summaries.invariants.  Issue 4's pass criterion is "no
+NaN, invariants within their stated bounds, results converging as the tolerance tightens, and a
+clear error (never garbage) where a case leaves the model's validity".  Here:
+
+1. **No NaN/inf** in any output of any run of the ladder.
+
+2. **Invariants within a round-off bound at tau3.**  Which quantities are invariants is the
+   model's property (docs/model.md section 6): the total angular momentum H about the Earth's
+   centre for the paper and energy models under central gravity without damping (6.1; every case
+   here), the energy E for the energy model only (section 5; across slack/taut switches, 9a).
+   The paper model does not conserve E (6.2: its joints do work when rods stretch), so its energy
+   change is reported, never bounded.  The bound: H is constant along the exact flow, so the
+   error of H after N steps is the *sum* of the per-step errors of H, with no amplification
+   between steps.  Each step (truncation aside) rounds every state component y_i to double, an
+   error uniform in +-u |y_i| (u = 2^-53), which moves H by
+   dH = sum m (dr x v + r x dv), standard deviation <= (2/sqrt3) u S_H with S_H = sum m |r| |v|,
+   and E by <= (1/sqrt3) u S_E, S_E = sum m (|v|^2 + mu/|r|).  Over N steps these errors add as a
+   random walk (standard deviation sqrt(N) times one step's), whose largest excursion over the
+   run exceeds 4 standard deviations with probability < 4 P(Z > 4) ~ 1e-4 (reflection principle):
+
+       B_H = 4 (2/sqrt3) u sqrt(N) S_H,        B_E = 4 (1/sqrt3) u sqrt(N) S_E,
+
+   with N the accepted steps of the tau3 run and S_H, S_E the largest over its outputs
+   (tetherlab.summaries.invariants).  Pass: max_t |H(t) - H(0)| <= B_H (and |E - E(0)| <= B_E for
+   the energy model) at tau3, i.e. the integration error of the invariant has fallen to the
+   round-off level, which is what "converged" can mean for an invariant in double precision.
+   Negative control (:func:`printed_negative_control`, part of the pass criterion): eq. 20 as
+   printed, which breaks H where rods carry transverse reactions (docs/model.md 6.1), run on the
+   mf/m0 = 1e-4 case (its rods bend) at 1e-11, must exceed its B_H.  Results are reported in
+   units of the tether's own angular momentum I n and energy I n^2 (I about the centre of mass,
+   n the mean motion; tetherlab.summaries.own_angular_momentum_scale).
+
+3. **Converging as the tolerance tightens.**  The case's measure D between two runs: the
+   largest distance between the bodies' final positions; for the slack-snap case the largest
+   difference of the first 64 slack/taut switch times (the switch sequences must be identical),
+   because its body positions, after 600 s of snaps, are sensitive beyond any tolerance (two
+   runs at 1e-12 and 1e-13 differ by 0.44 m) while its switch times up to ~270 s converge.
+   d1 = D(tau1, tau2), d2 = D(tau2, tau3), observed rate p = log10(d1 / d2) per decade.  An
+   error-per-step controller gives a global error ~ C tau^alpha with alpha near 1 ("tolerance
+   proportionality", Hairer, Norsett & Wanner, Solving ODEs I, section II.4), so successive
+   differences shrink by ~10^alpha.  Pass: d1 > F (the loose pair resolves the integration
+   error above the round-off floor F: otherwise the ladder shows nothing) and either p >= 0.5
+   (the difference shrinks by at least sqrt(10) a decade: half the tolerance-proportional rate;
+   a case that is not converging has p ~ 0) or d2 <= F (the tight pair has reached the floor).
+   The floor of the final-position difference of two runs, by the same round-off model:
+   position roundings u |r| / sqrt3 per step, velocity roundings u |v| / sqrt3 per step that
+   grow into an along-track drift of up to 3 dv t (Kepler: an energy error moves the mean
+   motion), both random walks over N_a + N_b steps, 4 standard deviations:
+
+       F = (4/sqrt3) u sqrt(N_a + N_b) (R + sqrt3 V T),
+
+   R, V the largest |r_cm|, |v_cm|, T the duration.  Switch times claim no floor (F = 0).
+
+4. **A clear error where the model's validity ends** (``expect_error``): every run of the
+   ladder stops with a SimulationError whose message names the failure and the rod, the same
+   rod at every tolerance, and stop times within 1e-6 s of each other (the crossing of the
+   collapse strain along a smooth strain history, closing at ~2 /s: tolerance-level strain
+   errors move it by ~1e-9 s; a stop that is garbage, or an accident of the step size, does
+   not repeat across a factor 100 in tolerance).
+
+Ladders: 1e-9, 1e-10, 1e-11 by default; 1e-8, 1e-9, 1e-10 for the stiff (EA x 1000) and 35-day
+cases, whose runs at 1e-10 / 1e-11 differ by no more than the floor F (the loose pair must
+resolve the integration error) and whose invariants are within their bounds at 1e-10.
+Writes OUTDIR/hard_cases.csv (every run), hard_cases_checks.csv (one row a case: every measured
+number beside its bound), hard_cases_summary.json (the gate values) and hard_cases.md; exits 1
+when a case fails.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 SCENES = HERE / "scenes"
-TOL_LOOSE, TOL_TIGHT = 1e-9, 1e-11
-# 1e-4 of the tether's own angular momentum is ~4e-12 of the total (orbital) one for the
-# bench-libration system (|H| / (I n) ~ 2.4e7), i.e. a few hundred ulps: a gross integration or
-# model error shows up, round-off accumulated over ~1e5 steps does not.  Measured at rtol 1e-11
-# (first run, this machine): worst 1.0e-5 (e = 0.95, whose scale uses the mean motion, ~100x
-# below the perigee rate), 2.6e-6 over 35 days, <= 1.2e-6 elsewhere.
-H_BOUND = 1e-4  # of I n
-E_BOUND = 1e-4  # of I n^2; energy model measured <= 9.4e-7
+LADDER = (1e-9, 1e-10, 1e-11)
+U = 2.0**-53  # unit round-off of IEEE double
+K_SIGMA = 4.0  # largest excursion of a random walk: P(max |W| > 4 sigma) < 4 P(Z > 4) ~ 1.3e-4
+MIN_RATE = 0.5  # decades of difference per decade of tolerance: half the tolerance-proportional 1
+STOP_TIME_AGREEMENT_S = 1e-6
+N_SWITCHES = 64  # switch times compared in the slack case (tetherlab.summaries.N_EVENTS_REPORTED)
 
 # name, scene file, changes, criteria
 CASES = [
-    ("stiff EA x1000", "hard-stiff.toml", {}, {"converge_m": 1.0}),
-    ("stiff EA x1000, energy model", "hard-stiff.toml", {"tethers.main.model": "energy"}, {"converge_m": 1.0}),
-    ("e = 0.95", "hard-eccentric.toml", {}, {"converge_m": 1.0}),
-    ("mf/m0 = 1e-4", "hard-massratio-small.toml", {}, {"converge_m": 1.0}),
-    ("mf/m0 = 1", "hard-massratio-one.toml", {}, {"converge_m": 1.0}),
-    ("mf/m0 = 1, energy model", "hard-massratio-one.toml", {"tethers.main.model": "energy"}, {"converge_m": 1.0}),
-    ("n = 128", "hard-n128.toml", {}, {"converge_m": 1.0}),
-    ("35 days", "hard-35day.toml", {}, {"converge_m": 100.0, "long": True}),
+    ("stiff EA x1000", "hard-stiff.toml", {}, {"ladder": (1e-8, 1e-9, 1e-10)}),
+    ("stiff EA x1000, energy model", "hard-stiff.toml", {"tethers.main.model": "energy"}, {"ladder": (1e-8, 1e-9, 1e-10)}),
+    ("e = 0.95", "hard-eccentric.toml", {}, {}),
+    ("mf/m0 = 1e-4", "hard-massratio-small.toml", {}, {}),
+    ("mf/m0 = 1", "hard-massratio-one.toml", {}, {}),
+    ("mf/m0 = 1, energy model", "hard-massratio-one.toml", {"tethers.main.model": "energy"}, {}),
+    ("n = 128", "hard-n128.toml", {}, {}),
+    ("35 days", "hard-35day.toml", {}, {"ladder": (1e-8, 1e-9, 1e-10), "long": True}),
     ("rod collapse", "hard-collapse.toml", {}, {"expect_error": ["rod collapsed", "rod "]}),
 ]
 # Tension-only tether (scene key tension_only): starts 1 % slack, snaps taut, chatters; every
-# slack/taut switch of every rod is a located event.  Energy model: its potential is C^1, so the
-# energy bound applies across the snaps.  Measured: 272/278 switches in 600 s at the two
-# tolerances, final body positions 0.12 m apart (the rods' chatter is sensitive, the bodies not).
+# slack/taut switch of every rod is a located event.  Energy model: its potential is C^1, so
+# energy is an invariant across the snaps (docs/model.md 9a).  About 270 switches in 600 s.
 SLACK_SLOT: list = [
     ("slack start, snaps taut (tension-only)", "hard-slack-snap.toml",
-     {"duration": "600 s", "tethers.main.model": "energy"}, {"converge_m": 1.0}),
+     {"duration": "600 s", "tethers.main.model": "energy"}, {"measure": "switch_times"}),
 ]
 CASES += SLACK_SLOT
 
 
-def check(name, changes, crit, loose, tight, scene):
-    """(passed, reasons) for one case from its two run records."""
-    reasons = []
+def ladder(crit) -> tuple[float, float, float]:
+    return tuple(crit.get("ladder", LADDER))
+
+
+def invariant_bounds(s: dict) -> tuple[float, float]:
+    """(B_H / (I n), B_E / (I n^2)) of one run summary: the round-off bounds of the module doc."""
+    root_n = math.sqrt(s["n_steps"])
+    b_h = K_SIGMA * (2.0 / math.sqrt(3.0)) * U * root_n * s["angmom_sum_scale"]
+    b_e = K_SIGMA * (1.0 / math.sqrt(3.0)) * U * root_n * s["energy_sum_scale"]
+    return b_h, b_e
+
+
+def position_floor_m(a: dict, b: dict) -> float:
+    """Round-off floor F (m) of the final-position difference of two runs (module doc, 3)."""
+    r = max(a["r_max_m"], b["r_max_m"])
+    v = max(a["v_max_m_s"], b["v_max_m_s"])
+    t = max(a["t_end_s"], b["t_end_s"])
+    return K_SIGMA / math.sqrt(3.0) * U * math.sqrt(a["n_steps"] + b["n_steps"]) * (r + math.sqrt(3.0) * v * t)
+
+
+def final_position_change_m(a: dict, b: dict, scene) -> float:
+    return max(
+        math.dist([a[f"{body.name}.{x}_m"] for x in "xyz"], [b[f"{body.name}.{x}_m"] for x in "xyz"])
+        for body in scene.bodies
+    )
+
+
+def switch_time_change_s(a: dict, b: dict) -> float:
+    """Largest difference of the first N_SWITCHES switch times; inf if the sequences differ."""
+    n = min(int(a["n_events"]), int(b["n_events"]), N_SWITCHES)
+    if n < N_SWITCHES:
+        return math.inf
+    if any(a[f"event{k}_code"] != b[f"event{k}_code"] for k in range(n)):
+        return math.inf
+    return max(abs(a[f"event{k}_t_s"] - b[f"event{k}_t_s"]) for k in range(n))
+
+
+def _stop_time(error: str) -> float:
+    """The t of 'run stopped at t = <t> s' in a SimulationError message (nan if absent)."""
+    head = "run stopped at t = "
+    i = error.find(head)
+    if i < 0:
+        return math.nan
+    try:
+        return float(error[i + len(head):].split(" s", 1)[0])
+    except ValueError:
+        return math.nan
+
+
+def _rod(error: str) -> str:
+    i = error.find(", rod ")
+    return error[i + 2 : error.find(" of ", i)] if i >= 0 else ""
+
+
+def check(name, changes, crit, recs, scene) -> dict:
+    """One case's verdict from its ladder's run records (loosest first): a dict with ``passed``,
+    ``reasons`` and every measured number beside its bound."""
+    taus = ladder(crit)
+    out = {"case": name, "ladder": " ".join(f"{t:.0e}" for t in taus), "reasons": []}
+    reasons = out["reasons"]
     if "expect_error" in crit:
-        for rec in (loose, tight):
+        stops, rods = [], set()
+        for rec in recs:
             if rec.ok:
                 reasons.append(f"rtol {rec.params['tol']:g}: ran to the end, expected a SimulationError")
             elif not rec.error.startswith("SimulationError") or not all(s in rec.error for s in crit["expect_error"]):
                 reasons.append(f"rtol {rec.params['tol']:g}: unexpected error: {rec.error}")
-        return not reasons, reasons
-    for rec in (loose, tight):
+            else:
+                stops.append(_stop_time(rec.error))
+                rods.add(_rod(rec.error))
+        if not reasons:
+            spread = max(stops) - min(stops) if all(math.isfinite(t) for t in stops) else math.inf
+            out.update(stop_time_s=min(stops), stop_time_spread_s=spread, stop_rod=", ".join(sorted(rods)))
+            if len(rods) != 1:
+                reasons.append(f"the runs name different rods: {sorted(rods)}")
+            if not spread <= STOP_TIME_AGREEMENT_S:
+                reasons.append(f"stop times spread over {spread:.3g} s > {STOP_TIME_AGREEMENT_S:g} s")
+        out["passed"] = not reasons
+        return out
+    for rec in recs:
         if not rec.ok:
             reasons.append(f"rtol {rec.params['tol']:g} failed: {rec.error}")
     if reasons:
-        return False, reasons
-    for rec in (loose, tight):
+        out["passed"] = False
+        return out
+    for rec in recs:
         if rec.summary["nonfinite"] != 0:
             reasons.append(f"rtol {rec.params['tol']:g}: {rec.summary['nonfinite']:.0f} non-finite outputs")
-    s = tight.summary
-    if not s["angmom_error_own"] <= H_BOUND:
-        reasons.append(f"|dH|/(I n) = {s['angmom_error_own']:.3g} > {H_BOUND:g}")
-    if changes.get("tethers.main.model") == "energy" and not s["energy_error_own"] <= E_BOUND:
-        reasons.append(f"|dE|/(I n^2) = {s['energy_error_own']:.3g} > {E_BOUND:g}")
-    dist = max(
-        math.dist([loose.summary[f"{b.name}.{a}_m"] for a in "xyz"], [s[f"{b.name}.{a}_m"] for a in "xyz"])
-        for b in scene.bodies
-    )
-    tight.summary["tolerance_change_m"] = dist
-    if not dist <= crit["converge_m"]:
-        reasons.append(f"final positions at rtol {TOL_LOOSE:g} and {TOL_TIGHT:g} differ by {dist:.3g} m > {crit['converge_m']} m")
-    return not reasons, reasons
+    s = [rec.summary for rec in recs]
+    tight = s[-1]
+    b_h, b_e = invariant_bounds(tight)
+    energy_model = scene.tethers[0].model == "energy"  # the scene has the case's changes
+    out.update(dH_own=tight["angmom_error_own"], B_H_own=b_h, dH_over_bound=tight["angmom_error_own"] / b_h,
+               dE_own=tight["energy_error_own"], energy_invariant=energy_model,
+               B_E_own=b_e if energy_model else math.nan,
+               dE_over_bound=tight["energy_error_own"] / b_e if energy_model else math.nan,
+               steps_tight=tight["n_steps"])  # fmt: skip
+    if not tight["angmom_error_own"] <= b_h:
+        reasons.append(f"|dH|/(I n) = {tight['angmom_error_own']:.3g} > round-off bound {b_h:.3g}")
+    if energy_model and not tight["energy_error_own"] <= b_e:
+        reasons.append(f"|dE|/(I n^2) = {tight['energy_error_own']:.3g} > round-off bound {b_e:.3g}")
+    if crit.get("measure") == "switch_times":
+        d1, d2 = switch_time_change_s(s[0], s[1]), switch_time_change_s(s[1], s[2])
+        f1 = f2 = 0.0
+        unit = "s"
+        out["measure"] = f"first {N_SWITCHES} switch times (s)"
+    else:
+        d1, d2 = final_position_change_m(s[0], s[1], scene), final_position_change_m(s[1], s[2], scene)
+        f1, f2 = position_floor_m(s[0], s[1]), position_floor_m(s[1], s[2])
+        unit = "m"
+        out["measure"] = "bodies' final positions (m)"
+    rate = math.log10(d1 / d2) if d1 > 0 and d2 > 0 and math.isfinite(d1) and math.isfinite(d2) else math.nan
+    out.update(d1=d1, d2=d2, floor1=f1, floor2=f2, rate=rate,
+               converge_score=d2 / max(d1 * 10.0**-MIN_RATE, f2) if math.isfinite(d1) else math.inf,
+               floor_over_d1=f1 / d1 if d1 > 0 else math.inf)  # fmt: skip
+    if not math.isfinite(d1) or not math.isfinite(d2):
+        reasons.append("switch sequences differ between tolerances")
+    elif not d1 > f1:
+        reasons.append(f"the loose pair differs by {d1:.3g} {unit}, not above the round-off floor {f1:.3g}: "
+                       "the ladder resolves no integration error (loosen it)")  # fmt: skip
+    elif not (rate >= MIN_RATE or d2 <= f2):
+        reasons.append(f"not converging: differences {d1:.3g} -> {d2:.3g} {unit} (rate {rate:.2f} < {MIN_RATE}) "
+                       f"and above the floor {f2:.3g}")  # fmt: skip
+    out["passed"] = not reasons
+    return out
+
+
+def printed_negative_control(paper_tight: dict, fname: str = "hard-massratio-small.toml", tol: float = 1e-11) -> dict:
+    """The H bound must see a model that does not conserve H: eq. 20 as printed (the transverse
+    inertia's sign, docs/model.md 6.1) on the mf/m0 = 1e-4 case, whose rods bend (a rod's own
+    mass dominates), at the tight tolerance.  Scenes refuse the printed model (evidence only), so
+    the kernel flag is switched as in tetherlab/verify.py::check_invariants.  The bound is
+    B_H for this run's steps with the scales of the paper model's run ``paper_tight``."""
+    import numpy as np
+
+    from tetherlab import diagnostics as D
+    from tetherlab.formulations.cowell import cowell_rhs
+    from tetherlab.integrators import integrate
+    from tetherlab.kernel import layout as L
+    from tetherlab.pipeline import prepare
+    from tetherlab.scene import load_scene
+    from tetherlab.summaries import own_angular_momentum_scale
+
+    sc = load_scene(SCENES / fname).replace(**{"integrator.rtol": tol, "integrator.atol": tol})
+    prep = prepare(sc)
+    prep.model.p[int(prep.model.p[L.H_OFF_TETH]) + L.TT_MODEL] = L.MODEL_PRINTED
+    r = integrate(sc.integrator.method, cowell_rhs, 0.0, prep.y0, prep.t_out, prep.model.fresh_params(),
+                  prep.rtol, prep.atol, second_order=True)  # fmt: skip
+    g = D.compute(prep.model, r.t, r.y)["global"]
+    H = g[:, D.G_HX : D.G_HZ + 1]
+    dh = float(np.linalg.norm(H - H[0], axis=1).max()) / own_angular_momentum_scale(sc)[0]
+    b_h, _ = invariant_bounds({**paper_tight, "n_steps": float(r.stats["n_accepted"])})
+    return {"dH_own": dh, "B_H_own": b_h, "over_bound": dh / b_h, "steps": r.stats["n_accepted"]}
+
+
+def _g(v, fmt=".3g"):
+    return "" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
+
+
+def report_md(rows, recs_by_case, control: dict | None = None) -> str:
+    md = ["## Hard cases", "",
+          "Each case runs on three tolerances a decade apart (column ladder). Pass (issue 4): no NaN in any run; at "
+          "the tightest tolerance the invariants within their round-off bounds; results converging as the tolerance "
+          "tightens; a case outside the model's validity stopping with a SimulationError naming the rod. The bounds "
+          "are derived, not fitted (full derivation: studies/hard_cases.py):", "",
+          "* invariants: H for the paper and energy models, E for the energy model only (docs/model.md 6; the "
+          "paper model's E is not conserved, so its dE is shown in brackets and not bounded). An invariant's error "
+          "is the sum of per-step errors (no amplification); rounding each state component (u = 2^-53) is a random "
+          "walk, 4 standard deviations: B_H = 4 (2/sqrt3) u sqrt(N) S_H, B_E = 4 (1/sqrt3) u sqrt(N) S_E, with N the "
+          "steps, S_H = max sum m|r||v|, S_E = max sum m(|v|^2 + mu/|r|). In units of the tether's own I n, I n^2.",
+          "* convergence: d1, d2 = the case's measure between tolerances 1-2 and 2-3; rate = log10(d1/d2) per "
+          f"decade (tolerance proportionality: ~1). Pass: d1 above the round-off floor F (the ladder resolves "
+          f"the integration error) and rate >= {MIN_RATE} or d2 <= F. F = (4/sqrt3) u sqrt(N_a + N_b) "
+          "(R + sqrt3 V T) for positions (position and velocity roundings, the latter drifting along-track); "
+          "none claimed for switch times.",
+          f"* validity: SimulationError at every tolerance, naming the same rod, stop times within {STOP_TIME_AGREEMENT_S:g} s.", "",
+          "| case | result | ladder | dH/(I n) | bound | dE/(I n^2) | bound | measure | d1 | d2 | floor F (d2) | rate | steps (tight) | integration wall, 3 runs (s) | notes |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        # integration time (compilation excluded); a failed run has no summary: its whole run time
+        wall = sum(rec.summary.get("wall_s", rec.wall_s) for rec in recs_by_case[r["case"]])
+        notes = "; ".join(r["reasons"])
+        if "stop_time_s" in r or not r.get("measure"):
+            err = (recs_by_case[r["case"]][-1].error or "").replace("|", "/")[:170]
+            extra = (f"stopped at t = {r['stop_time_s']:.9g} s ({r['stop_rod']}) at every tolerance, spread "
+                     f"{r['stop_time_spread_s']:.2g} s; " if "stop_time_s" in r else "")
+            md.append(f"| {r['case']} | {'PASS' if r['passed'] else 'FAIL'} | {r['ladder']} | | | | | | | | | | | "
+                      f"{wall:.3g} | {extra}{err}{'; ' + notes if notes else ''} |")  # fmt: skip
+            continue
+        de = _g(r["dE_own"]) if r["energy_invariant"] else f"({_g(r['dE_own'])})"
+        md.append(
+            f"| {r['case']} | {'PASS' if r['passed'] else 'FAIL'} | {r['ladder']} | {_g(r['dH_own'])} | {_g(r['B_H_own'])} | "
+            f"{de} | {_g(r['B_E_own']) if r['energy_invariant'] else 'not an invariant'} | {r['measure']} | "
+            f"{_g(r['d1'])} | {_g(r['d2'])} | {_g(r['floor2']) if r['floor2'] else 'none'} | {_g(r['rate'], '.2f')} | "
+            f"{r['steps_tight']:.0f} | {wall:.3g} | {notes} |"
+        )  # fmt: skip
+    if control is not None:
+        md += ["", f"Negative control (the H bound must see a model error): eq. 20 as printed on the mf/m0 = 1e-4 case "
+               f"(its rods bend) at rtol 1e-11: |dH|/(I n) = {control['dH_own']:.3g} against the bound "
+               f"{control['B_H_own']:.3g}: {control['over_bound']:.2f} x the bound, "
+               f"{'detected' if control['over_bound'] > 1 else 'NOT DETECTED (the bound is toothless here)'}. "
+               "On the straight-tether cases the printed sign hardly changes H (docs/model.md 6.1: it needs transverse "
+               "reactions)."]
+    md += ["", f"Slack-tether cases: {len(SLACK_SLOT)} (tension-only tether, switches located as events).", "",
+           "The n = 128 case runs 200 s (it ran 300 s before): between about 210 s and 300 s this tether enters a "
+           "phase in which differences between runs grow 10^3 - 10^5 fold and radau5 needs about 5 times the steps "
+           "(radau5 at 1e-10 and 1e-11: 1.9e-8 m apart at 200 s, 2.7e-3 m at 300 s; dop853 at 1e-9, 1e-10, 1e-11 lie "
+           "2e-5 ... 4e-5 m from dop853 at 1e-12 at 300 s), so final positions at 300 s show no convergence in "
+           "1e-9 ... 1e-11; at 200 s they converge at rate 2. What that phase is (a lateral-mode instability of the "
+           "128-rod chain, or a numerical one) is not settled here.", ""]
+    return "\n".join(md)
 
 
 def main(argv=None) -> int:
@@ -109,42 +340,53 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     cases = [c for c in CASES if not (args.skip_long and c[3].get("long"))]
     scenes, params, labels, base = [], [], [], {}
-    for name, fname, changes, _ in cases:
+    for name, fname, changes, crit in cases:
         sc = load_scene(SCENES / fname).replace(**changes) if changes else load_scene(SCENES / fname)
         base[name] = sc
-        for tol in (TOL_LOOSE, TOL_TIGHT):
+        for tol in ladder(crit):
             scenes.append(sc.replace(**{"integrator.rtol": tol, "integrator.atol": tol}))
             params.append({"case": name, "tol": tol})
             labels.append(f"{name} rtol {tol:g}")
     res = run_sweep(scenes, invariants, cache_dir=out / "cache", scheduler=args.scheduler, workers=args.workers,
                     labels=labels, params=params, progress=not args.quiet, description="hard cases")
-    md = ["## Hard cases", "",
-          f"Two runs per case (rtol = atol = {TOL_LOOSE:g}, {TOL_TIGHT:g}). Pass: no NaN; |dH| <= {H_BOUND:g} I n "
-          f"(tether's own angular momentum); energy model |dE| <= {E_BOUND:g} I n^2; final positions of the two "
-          "runs within the stated distance; cases outside the model's validity stop with a SimulationError "
-          "naming the rod.", "",
-          "| case | result | dH/(I n) | dE/(I n^2) | tolerance change (m) | bound (m) | wall tight (s) | notes |",
-          "|---|---|---|---|---|---|---|---|"]
-    failed = []
-    for k, (name, fname, changes, crit) in enumerate(cases):
-        loose, tight = res.records[2 * k], res.records[2 * k + 1]
-        ok, reasons = check(name, changes, crit, loose, tight, base[name])
-        if not ok:
-            failed.append(name)
-        s = tight.summary
-        if "expect_error" in crit:
-            note = (tight.error or "").replace("|", "/")[:160]
-            md.append(f"| {name} | {'PASS' if ok else 'FAIL'} | | | | | {tight.wall_s:.3g} | {note}; {'; '.join(reasons)} |")
-        else:
-            md.append(
-                f"| {name} | {'PASS' if ok else 'FAIL'} | {s.get('angmom_error_own', math.nan):.3g} | "
-                f"{s.get('energy_error_own', math.nan):.3g} | {s.get('tolerance_change_m', math.nan):.3g} | "
-                f"{crit['converge_m']} | {s.get('wall_s', math.nan):.3g} | {'; '.join(reasons)} |"
-            )
-    md += ["", f"Slack-tether cases: {len(SLACK_SLOT)} (tension-only tether, switches located as events).", ""]
-    res.frame().to_csv(out / "hard_cases.csv", index=False, float_format="%.9g")
-    (out / "hard_cases.md").write_text("\n".join(md))
-    print("\n".join(md))
+    recs_by_case, rows = {}, []
+    for rec in res.records:
+        recs_by_case.setdefault(rec.params["case"], []).append(rec)
+    for name, fname, changes, crit in cases:
+        rows.append(check(name, changes, crit, recs_by_case[name], base[name]))
+    failed = [r["case"] for r in rows if not r["passed"]]
+    control = None
+    paper_small = recs_by_case.get("mf/m0 = 1e-4", [])
+    if paper_small and paper_small[-1].ok and paper_small[-1].params["tol"] == 1e-11:
+        control = printed_negative_control(paper_small[-1].summary)
+        if not control["over_bound"] > 1.0:
+            failed.append("negative control (eq. 20 as printed within the H bound)")
+
+    import pandas as pd
+
+    frame = res.frame()
+    frame = frame[[c for c in frame.columns if not c.startswith("event") or c == "n_events"]]
+    frame.to_csv(out / "hard_cases.csv", index=False, float_format="%.9g")
+    checks = pd.DataFrame([{**r, "reasons": "; ".join(r["reasons"])} for r in rows])
+    checks.to_csv(out / "hard_cases_checks.csv", index=False, float_format="%.6g")
+
+    def worst(key):
+        vals = [r[key] for r in rows if isinstance(r.get(key), float) and not math.isnan(r[key])]
+        return max(vals) if vals else math.nan
+
+    summary = {
+        "failed": len(failed),
+        "failed_cases": failed,
+        "invariant_over_bound": max(worst("dH_over_bound"), worst("dE_over_bound")),
+        "convergence_score": worst("converge_score"),
+        "floor_over_loose_change": worst("floor_over_d1"),
+        "stop_time_spread_s": worst("stop_time_spread_s"),
+        "negative_control_over_bound": control["over_bound"] if control else None,
+    }
+    (out / "hard_cases_summary.json").write_text(json.dumps(summary, indent=1))
+    md = report_md(rows, recs_by_case, control)
+    (out / "hard_cases.md").write_text(md)
+    print(md)
     if failed:
         print(f"FAILED: {', '.join(failed)}", file=sys.stderr)
     return 1 if failed else 0

@@ -19,6 +19,9 @@ tip body):
 * :func:`final_state`: every body's final position, for work-precision errors.
 * :func:`invariants`: NaN check, angular momentum and energy drift in units of the tether's own
   angular momentum and rotational energy, final positions (hard cases).
+* :func:`stiefel_heyoka_final_state`: the oracle's point on the work-precision axes: heyoka
+  (double-precision Taylor) on the Stiefel-Scheifele scene at the scene's tolerance.  Needs
+  heyoka installed (it is imported inside :func:`tetherlab.benchmarks.stiefel.heyoka_rows` only).
 """
 
 from __future__ import annotations
@@ -168,12 +171,34 @@ def _semi_major_axis(scene) -> float:
     return -mu / (2 * energy)
 
 
+#: how many located events (slack/taut switches) :func:`invariants` reports, time and identity
+N_EVENTS_REPORTED = 64
+
+
+def event_code(event: dict) -> float:
+    """A float naming a located event for a summary: 2 * rod + 1 for a rod going taut, 2 * rod for
+    one going slack (names ``slack.<tether>.rod<k>``), -1 for any other event (a [stop])."""
+    name = event.get("event", "")
+    head, _, rod = name.rpartition(".rod")
+    if not name.startswith("slack.") or not rod.isdigit():
+        return -1.0
+    return float(2 * int(rod) + (1 if event.get("side") == "taut" else 0))
+
+
 def invariants(scene) -> dict[str, float]:
     """Hard-case checks: finite outputs, invariant drifts in the tether's own units, final state.
 
     ``angmom_error_own`` = max_t |H(t) - H(0)| / (I n); ``energy_error_own`` = max_t |E(t) -
     E(0)| / (I n^2) (meaningful for the "energy" model, which conserves E; docs/model.md);
     ``nonfinite`` = number of non-finite values in the outputs (must be 0).
+
+    The scales that the round-off bounds of studies/hard_cases.py need, all maxima over the
+    output rows: ``angmom_sum_scale`` S_H = sum of m |r| |v| over the system, taken as
+    |r_cm| sqrt(2 M KE) (every mass moves with the centre of mass to 1e-3 here), in units of
+    I n; ``energy_sum_scale`` S_E = 2 KE + |V_grav| = sum m (|v|^2 + mu/|r|), in units of
+    I n^2; ``r_max_m`` = |r_cm|; ``v_max_m_s`` = sqrt(2 KE / M); ``t_end_s``.  Located events:
+    ``n_events``, and for the first :data:`N_EVENTS_REPORTED` ``event<k>_t_s`` and
+    ``event<k>_code`` (:func:`event_code`).
     """
     res = _run(scene)
     ts, d = res.timeseries, res.diagnostics
@@ -182,16 +207,63 @@ def invariants(scene) -> dict[str, float]:
     E = d["energy_J"].to_numpy()
     t = _tether(scene)
     strain = np.stack([ts[f"{t.name}.rod{i + 1}.strain"].to_numpy() for i in range(t.rods)], axis=1)
+    mass = sum(b.mass_kg for b in scene.bodies) + sum(th.mass_kg for th in scene.tethers)
+    ke = d["kinetic_J"].to_numpy()
+    r_cm = d["com_radius_m"].to_numpy()
     out = {
         "nonfinite": float(np.count_nonzero(~np.isfinite(ts.to_numpy())) + np.count_nonzero(~np.isfinite(d.to_numpy()))),
         "angmom_error_own": float(np.max(np.linalg.norm(H - H[0], axis=1)) / h_scale),
         "energy_error_own": float(np.max(np.abs(E - E[0])) / e_scale),
         "strain_min": float(strain.min()),
         "strain_max": float(strain.max()),
+        "angmom_sum_scale": float(np.max(r_cm * np.sqrt(2.0 * mass * ke)) / h_scale),
+        "energy_sum_scale": float(np.max(2.0 * ke + np.abs(d["potential_J"].to_numpy())) / e_scale),
+        "r_max_m": float(np.max(r_cm)),
+        "v_max_m_s": float(np.sqrt(2.0 * np.max(ke) / mass)),
+        "t_end_s": float(ts["t_s"].iloc[-1]),
     }
+    events = res.stats.get("events", [])
+    out["n_events"] = float(len(events))
+    for k, ev in enumerate(events[:N_EVENTS_REPORTED]):
+        out[f"event{k}_t_s"] = float(ev["t_s"])
+        out[f"event{k}_code"] = event_code(ev)
     for name in _body_names(scene):
         for a in "xyz":
             col = f"{name}.{a}_m"
             if col in ts:
                 out[col] = float(ts[col].iloc[-1])
     return {**out, **_cost(res)}
+
+
+#: paper section 4.1: t_f = 50 revolutions; tetherlab.benchmarks.stiefel.heyoka_rows integrates to it
+STIEFEL_DURATION_S = 288.12768941 * 86400.0
+
+
+def stiefel_heyoka_final_state(scene) -> dict[str, float]:
+    """heyoka's final position (m) of the Stiefel-Scheifele satellite at the scene's tolerance.
+
+    The scene only selects the tolerance (``integrator.rtol``, which must equal ``atol``: heyoka
+    has one); the equations are heyoka's own expression system in
+    :func:`tetherlab.benchmarks.stiefel.heyoka_rows` (the reference builder's), so the scene must
+    be the Stiefel-Scheifele one.  Cost keys as for tetherlab's runs, measured alike: ``wall_s``
+    is one ``propagate_until`` after the integrator is built (its JIT compilation excluded, as
+    tetherlab's kernel compilation is) and after one warm-up propagation; ``n_steps`` counts
+    Taylor steps.  There is no ``n_rhs``: a Taylor method never evaluates the right-hand side
+    (it builds each step's Taylor coefficients by automatic differentiation).
+    """
+    from .benchmarks.stiefel import heyoka_rows
+
+    if scene.name != "stiefel-scheifele" or abs(scene.duration_seconds() - STIEFEL_DURATION_S) > 1e-3:
+        raise ValueError(
+            "stiefel_heyoka_final_state: expected the Stiefel-Scheifele scene (name 'stiefel-scheifele', "
+            f"duration {STIEFEL_DURATION_S} s: heyoka_rows integrates that problem only); got "
+            f"{scene.name!r} over {scene.duration_seconds()!r} s"
+        )
+    tol = float(scene.integrator.rtol)
+    if float(scene.integrator.atol) != tol:
+        raise ValueError(f"integrator: heyoka has one tolerance; expected atol == rtol, got rtol {tol!r}, "
+                         f"atol {scene.integrator.atol!r}")
+    row = heyoka_rows(tols=(tol,), repeats=1)[0]
+    r_m, _ = row["run"]()  # deterministic: the timed run's final state again, for the caller's error measure
+    return {"sat.x_m": float(r_m[0]), "sat.y_m": float(r_m[1]), "sat.z_m": float(r_m[2]),
+            "t_end_s": STIEFEL_DURATION_S, "wall_s": float(row["wall_s"]), "n_steps": float(row["steps"])}

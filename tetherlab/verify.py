@@ -245,8 +245,17 @@ def _deorbit_gates(outdir: Path) -> dict:
 
 
 def _hard_cases_gates(outdir: Path) -> dict:
-    md = (outdir / "hard_cases.md").read_text()
-    return {"hard_cases_failed": float(sum(1 for line in md.splitlines() if "| FAIL |" in line))}
+    s = json.loads((outdir / "hard_cases_summary.json").read_text())
+    control = s.get("negative_control_over_bound")
+    return {
+        "hard_cases_failed": float(s["failed"]),
+        "hard_cases_invariant_over_bound": s["invariant_over_bound"],
+        "hard_cases_convergence_score": s["convergence_score"],
+        "hard_cases_floor_over_loose_change": s["floor_over_loose_change"],
+        "hard_cases_collapse_stop_spread": s["stop_time_spread_s"],
+        # the control must exceed its bound; the gate reads bound / measured (<= 1 passes)
+        "hard_cases_negative_control": (1.0 / control) if control else math.inf,
+    }
 
 
 #: (title, study script in studies/, its arguments after OUTDIR, markdown it writes, gate reader)
