@@ -327,7 +327,8 @@ def write_report(df, tref, lat_refs, lib_ref, out: Path):
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("|relative error vs reference|")
     axes[0].legend(fontsize=7)
-    fig.tight_layout()
+    from tetherlab.provenance import stamp_figure
+    stamp_figure(fig, "studies/bead_vs_tmed.py; lumped-mass oracle tetherlab/oracles/bead.py")
     fig.savefig(out / "bead_vs_tmed.png", dpi=120)
     plt.close(fig)
 

@@ -177,7 +177,8 @@ def main(argv=None) -> int:
     ax.set_ylabel("error")
     ax.legend(fontsize=7)
     ax.set_title("Error against Irvine (paper model)")
-    fig.tight_layout()
+    from tetherlab.provenance import stamp_figure
+    stamp_figure(fig, "studies/catenary.py; references/catenary (Irvine's elastic catenary)")
     fig.savefig(out / "catenary.png", dpi=120)
 
     sol = ref["solution"]

@@ -90,7 +90,8 @@ def figure(case, analysis, path):
     ax.grid(True, which="both", alpha=0.3)
     if ax.lines:
         ax.legend(fontsize=8)
-    fig.tight_layout()
+    from tetherlab.provenance import stamp_figure
+    stamp_figure(fig, "studies/convergence.py, studies/convergence.toml; Richardson estimate (tetherlab/richardson.py)")
     fig.savefig(path, dpi=110)
     plt.close(fig)
 

@@ -18,7 +18,6 @@ import argparse
 import datetime
 import json
 import math
-import subprocess
 import sys
 from pathlib import Path
 
@@ -39,10 +38,9 @@ CLOSED_FORM_TOL = 0.10  # issue 3: simulation within 10 % of the closed form
 
 
 def _git_commit() -> str:
-    try:
-        return subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-    except OSError:
-        return "unknown"
+    from tetherlab.provenance import git_commit
+
+    return git_commit()[0]
 
 
 def run_case(label: str, scene) -> dict:
@@ -141,9 +139,9 @@ def plot(cases: list[dict], path: Path) -> None:
     ax.flat[0].legend(fontsize=7)
     for a in ax[-1]:
         a.set_xlabel("time (days)")
-    stamp = f"tetherlab {_git_commit()[:10]}  {datetime.date.today().isoformat()}  studies/deorbit.py"
-    fig.suptitle("Electrodynamic de-orbit (paper section 5, Fig. 7)\n" + stamp, fontsize=9)
-    fig.tight_layout()
+    fig.suptitle("Electrodynamic de-orbit (paper section 5, Fig. 7)", fontsize=9)
+    from tetherlab.provenance import stamp_figure
+    stamp_figure(fig, "studies/deorbit.py; studies/scenes/deorbit-ed*.toml; closed form tetherlab/orbits/ed_decay.py")
     fig.savefig(path, dpi=120)
     plt.close(fig)
 

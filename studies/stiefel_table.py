@@ -12,10 +12,7 @@ stiefel_table.md and stiefel_table.png (log-log error against steps per orbit).
 
 from __future__ import annotations
 
-import datetime
 import json
-import platform
-import subprocess
 import sys
 from pathlib import Path
 
@@ -58,18 +55,10 @@ def rows() -> list[dict]:
 
 
 def footer() -> str:
-    try:
-        commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
-                                text=True, check=False).stdout.strip()  # fmt: skip
-    except OSError:
-        commit = "unknown"
-    import numba
-    import scipy
+    from tetherlab.provenance import footer as provenance
 
-    return (f"commit {commit}; numpy {np.__version__}, scipy {scipy.__version__}, numba {numba.__version__}; "
-            f"{platform.machine()} {platform.system()}; {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%dT%H:%MZ}; "
-            "reference: references/stiefel/reference.json (heyoka binary128 + decimal Taylor); "
-            "heyoka rows: the same file, heyoka_double")  # fmt: skip
+    return (f"{provenance()}; reference: references/stiefel/reference.json (heyoka binary128 + decimal "
+            "Taylor); heyoka rows: the same file, heyoka_double")  # fmt: skip
 
 
 def write(outdir: Path, table: list[dict]) -> None:
@@ -104,8 +93,8 @@ def write(outdir: Path, table: list[dict]) -> None:
     ax.set_ylabel("final position error [m]")
     ax.set_title("Stiefel-Scheifele, 50 orbits (tol 1e-4 ... 1e-13)")
     ax.legend(fontsize=8)
-    fig.text(0.01, 0.005, footer()[:150], fontsize=5)
-    fig.tight_layout()
+    from tetherlab.provenance import stamp_figure
+    stamp_figure(fig, "studies/stiefel_table.py; references/stiefel/reference.json (heyoka binary128 + decimal Taylor)")
     fig.savefig(outdir / "stiefel_table.png", dpi=120)
 
 

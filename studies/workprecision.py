@@ -245,7 +245,8 @@ def figures(rows, out: Path):
             ax.set_title("heyoka absent: a Taylor method makes no rhs evaluations "
                          "(its Taylor steps: work_precision_stiefel.png)", fontsize=8)  # fmt: skip
         ax.legend(fontsize=6, ncol=2)
-        fig.tight_layout()
+        from tetherlab.provenance import stamp_figure
+        stamp_figure(fig, "studies/workprecision.py; truth: dop853 at 1e-14 runs, references/stiefel/reference.json")
         fig.savefig(out / f"work_precision_{name}.png", dpi=110)
         plt.close(fig)
 
@@ -261,7 +262,8 @@ def figures(rows, out: Path):
                  "order grows as the tolerance tightens; not the same work per step)")  # fmt: skip
     b.set_title("(b) against steps: heyoka has no rhs evaluations to count", fontsize=9)
     a.legend(fontsize=6)
-    fig.tight_layout()
+    from tetherlab.provenance import stamp_figure
+    stamp_figure(fig, "studies/workprecision.py; references/stiefel/reference.json; heyoka taylor_adaptive (oracle)")
     fig.savefig(out / "work_precision_stiefel.png", dpi=110)
     plt.close(fig)
 

@@ -25,6 +25,8 @@ def plot_run(run_dir, out_dir=None) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     plt = _plt()
     ts, dg = res.timeseries, res.diagnostics
+    scene_name = res.scene_dict.get("name", "?")
+    src = f"run {Path(run_dir).resolve().name} (scene '{scene_name}', saved with tetherlab {res.meta.get('versions', {}).get('tetherlab', '?')})"
     period = res.meta.get("model", {}).get("ref_period_s") or float("nan")
     tx = dg["t_s"] / period if np.isfinite(period) else dg["t_s"]
     xlabel = "t (orbits)" if np.isfinite(period) else "t (s)"
@@ -39,7 +41,7 @@ def plot_run(run_dir, out_dir=None) -> list[Path]:
     ax[1].set_ylabel("out-of-plane φ (deg)")
     ax[1].set_xlabel(xlabel)
     ax[0].legend(loc="upper right")
-    files.append(_save(fig, out / "libration.png", plt))
+    files.append(_save(fig, out / "libration.png", plt, src))
 
     fig, ax = plt.subplots(figsize=(8, 4))
     for c in [c for c in ts.columns if c.endswith(".axial_force_N")]:
@@ -48,7 +50,7 @@ def plot_run(run_dir, out_dir=None) -> list[Path]:
     ax.set_xlabel(xlabel)
     if len(ax.lines) <= 12:
         ax.legend(fontsize=7)
-    files.append(_save(fig, out / "tension.png", plt))
+    files.append(_save(fig, out / "tension.png", plt, src))
 
     fig, ax = plt.subplots(2, 1, sharex=True, figsize=(8, 5))
     ax[0].plot(tx, np.abs(dg["energy_error_rel"]) + 1e-300)
@@ -58,7 +60,7 @@ def plot_run(run_dir, out_dir=None) -> list[Path]:
     ax[1].set_yscale("log")
     ax[1].set_ylabel("|ΔH| / |H0|")
     ax[1].set_xlabel(xlabel)
-    files.append(_save(fig, out / "invariants.png", plt))
+    files.append(_save(fig, out / "invariants.png", plt, src))
 
     # tether shape in the orbital frame of the centre of mass, a few snapshots
     fig, ax = plt.subplots(figsize=(6, 6))
@@ -79,12 +81,14 @@ def plot_run(run_dir, out_dir=None) -> list[Path]:
     ax.set_ylabel("radial (m)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.legend(fontsize=7)
-    files.append(_save(fig, out / "shape.png", plt))
+    files.append(_save(fig, out / "shape.png", plt, src))
     return files
 
 
-def _save(fig, path: Path, plt) -> Path:
-    fig.tight_layout()
+def _save(fig, path: Path, plt, sources: str) -> Path:
+    from .provenance import stamp_figure
+
+    stamp_figure(fig, sources)
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path

@@ -9,12 +9,10 @@ is non-zero when any gate fails.
 from __future__ import annotations
 
 import argparse
-import datetime as _dt
 import html
 import json
 import math
 import re
-import subprocess
 import sys
 import time
 import tomllib
@@ -308,20 +306,9 @@ def run_studies(out: Path, only=None):
 
 
 def footer() -> str:
-    from .result import library_versions
+    from .provenance import footer as _footer
 
-    try:
-        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
-    except OSError:
-        commit, dirty = "unknown", ""
-    v = library_versions()
-    date = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    return (
-        f"commit {commit}{' (with uncommitted changes)' if dirty else ''} | "
-        + ", ".join(f"{k} {val}" for k, val in v.items())
-        + f" | {date}"
-    )
+    return _footer()
 
 
 def _table_md(rows):
