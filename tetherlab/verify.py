@@ -298,11 +298,21 @@ def run_studies(out: Path, only=None):
             md = (sdir / md_name).read_text() if md_name else _summary_md(name, sdir)
             # images and links in the study's Markdown are relative to its own directory
             md = re.sub(r"\]\((?!https?:)([^)]+)\)", lambda m: f"]({name}/{m.group(1)})", md)
+            md = _nest_headings(md)
             sections.append((title, md, time.perf_counter() - t0))
         except Exception as exc:  # report and go on: one broken study must not hide the rest
             failures.append(name)
             sections.append((title, f"**Study failed:** `{type(exc).__name__}: {exc}`", time.perf_counter() - t0))
     return sections, values, failures
+
+
+def _nest_headings(md: str) -> str:
+    """A study's Markdown under the report's own section heading: its leading title (which the
+    report's heading replaces) is dropped and its other headings go one level down."""
+    lines = md.lstrip("\n").split("\n")
+    if lines and re.match(r"#{1,2} ", lines[0]):
+        lines = lines[1:]
+    return re.sub(r"^(#{1,5}) ", r"#\1 ", "\n".join(lines), flags=re.M)
 
 
 def footer() -> str:
@@ -429,7 +439,7 @@ def _md_to_html(text: str) -> str:
         if m:
             out.append(f'<img src="{html.escape(m.group(2))}" alt="{html.escape(m.group(1))}" width="720">')
         elif line.startswith("#"):
-            level = min(len(line) - len(line.lstrip("#")) + 1, 6)
+            level = min(len(line) - len(line.lstrip("#")), 6)  # headings arrive nested (_nest_headings)
             out.append(f"<h{level}>{html.escape(line.lstrip('#').strip())}</h{level}>")
         elif line.strip():
             out.append(f"<p>{html.escape(line)}</p>")
