@@ -117,12 +117,16 @@ def test_processes_and_dask_give_identical_results(tmp_path):
     assert [r.summary for r in local.records] == [r.summary for r in dask.records]
 
 
-def test_study_file_is_read_and_checked(tmp_path):
-    scene_file = tmp_path / "s.toml"
-    scene_file.write_text(
+def _write_circular_orbit_scene(path):
+    """A 600 s circular-orbit point-mass scene, the base of the study-file tests."""
+    path.write_text(
         'name = "s"\nduration = "600 s"\n[central_body]\nname = "earth"\n[effects]\ncentral_gravity = {}\n'
         '[bodies.sat]\nmass = "1 kg"\nelements = { a = "7000 km", e = 0.0 }\n[output]\ncount = 3\n'
     )
+
+
+def test_study_file_is_read_and_checked(tmp_path):
+    _write_circular_orbit_scene(tmp_path / "s.toml")
     study = tmp_path / "study.toml"
     study.write_text(
         'name = "t"\n[[case]]\nid = "r"\nscene = "s.toml"\nsummary = "tests.test_sweep:orbit_radius"\n'
@@ -138,11 +142,7 @@ def test_study_file_is_read_and_checked(tmp_path):
 
 
 def test_several_cases_run_as_one_sweep_longest_first(tmp_path):
-    scene_file = tmp_path / "s.toml"
-    scene_file.write_text(
-        'name = "s"\nduration = "600 s"\n[central_body]\nname = "earth"\n[effects]\ncentral_gravity = {}\n'
-        '[bodies.sat]\nmass = "1 kg"\nelements = { a = "7000 km", e = 0.0 }\n[output]\ncount = 3\n'
-    )
+    _write_circular_orbit_scene(tmp_path / "s.toml")
     study = tmp_path / "study.toml"
     study.write_text(
         'name = "t"\n'
