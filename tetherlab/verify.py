@@ -315,12 +315,6 @@ def _nest_headings(md: str) -> str:
     return re.sub(r"^(#{1,5}) ", r"#\1 ", "\n".join(lines), flags=re.M)
 
 
-def footer() -> str:
-    from .provenance import footer as _footer
-
-    return _footer()
-
-
 def _table_md(rows):
     if not rows:
         return ""
@@ -392,6 +386,8 @@ def main(argv=None) -> int:
     md += ["## Figures", ""]
     for name, files in figs:
         md += [f"### {name}", ""] + [f"![{name}]({f.as_posix()})" for f in files] + [""]
+    from .provenance import footer
+
     foot = footer()
     md += ["---", foot, ""]
     (out / "index.md").write_text("\n".join(md))
