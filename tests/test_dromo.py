@@ -204,16 +204,18 @@ def _stiefel_sigma_run(t_out, method="dop853", tol=1e-11):
     return dromo.integrate_sigma(method, pe, prep.y0[:3], prep.y0[3:6], t_out, tol, tol, mu, L), prep
 
 
-def test_sigma_clock_outputs_do_not_alter_the_trajectory():
-    """DOP853's compiled clock loop restarts from the start of the crossing step after each
-    output, so the outputs do not move the integration's path: the only difference is that a
-    restart forgets the step controller's last rejection (which caps the next step)."""
+@pytest.mark.parametrize("method", ["dop853", "vern9"])
+def test_sigma_clock_outputs_do_not_alter_the_trajectory(method):
+    """The compiled clock loop restarts from the start of the crossing step after each output,
+    so the outputs do not move the integration's path: the only difference is that a restart
+    forgets the step controller's last rejection (which caps the next step)."""
     t_f = 20 * 86400.0
-    few, _ = _stiefel_sigma_run(np.array([0.0, t_f]))
-    many, _ = _stiefel_sigma_run(np.linspace(0.0, t_f, 37))
+    few, _ = _stiefel_sigma_run(np.array([0.0, t_f]), method)
+    many, _ = _stiefel_sigma_run(np.linspace(0.0, t_f, 37), method)
     assert few.status == 0 and many.status == 0, (few.message, many.message)
-    # measured 0.5 mm after 20 days at tol 1e-11, with the same step count; the integration's own
-    # error there is ~6 cm (0.87 m over 50 revolutions, Figure-3 table): bound 2 mm
+    # measured 0.5 mm (DOP853) and 0.12 mm (Vern9) after 20 days at tol 1e-11, with the same step
+    # count; the integration's own error there is ~6 cm (0.87 m over 50 revolutions, Figure-3
+    # table): bound 2 mm
     assert np.linalg.norm(few.y[-1, :3] - many.y[-1, :3]) < 2e-3
     assert few.stats["n_accepted"] == many.stats["n_accepted"]
     assert many.t.size == 37 and np.array_equal(many.t, np.linspace(0.0, t_f, 37))
@@ -222,11 +224,13 @@ def test_sigma_clock_outputs_do_not_alter_the_trajectory():
     assert many.stats["time_residual_max_s"] < 1e-3
 
 
-def test_sigma_clock_agrees_with_the_grid_search():
-    """The compiled clock (DOP853) and the sigma grid + Newton search (the other methods' path)
-    give the same states at the same output times, to the integration's own accuracy."""
+@pytest.mark.parametrize("method", ["dop853", "vern9"])
+def test_sigma_clock_agrees_with_the_grid_search(method):
+    """The compiled clock (DOP853 or Vern9) and the sigma grid + Newton search (the other
+    methods' path, here run with DOP853) give the same states at the same output times, to the
+    integration's own accuracy."""
     t_out = np.linspace(0.0, 20 * 86400.0, 5)
-    clock, prep = _stiefel_sigma_run(t_out, tol=1e-12)
+    clock, prep = _stiefel_sigma_run(t_out, method, tol=1e-12)
     mu = prep.mu_m3_s2
     L = float(np.linalg.norm(prep.y0[:3]))
     from tetherlab.kernel.layout import FORM_DROMO_SIGMA
@@ -235,15 +239,16 @@ def test_sigma_clock_agrees_with_the_grid_search():
     grid = dromo._integrate_sigma_grid("dop853", pe, prep.y0[:3], prep.y0[3:6], t_out, 1e-12, 1e-12,
                                        mu, L, 0.0, 10**7, None, dromo.GRID_PER_REV)  # fmt: skip
     assert clock.status == 0 and grid.status == 0
-    # both are DOP853 at 1e-12 over 3.5 revolutions of the Stiefel orbit (about 4 cm/revolution
-    # at 1e-11 in the Figure-3 table): they differ by the outputs' path only; bound 1 cm
+    # both at 1e-12 over 3.5 revolutions of the Stiefel orbit (about 4 cm/revolution at 1e-11 in
+    # the Figure-3 table): they differ by the outputs' path (and the method) only; bound 1 cm
     dr = np.max(np.linalg.norm(clock.y[:, :3] - grid.y[:, :3], axis=1))
     assert dr < 1e-2, dr
 
 
-def test_sigma_clock_reports_a_failure_with_the_rows_before_it():
+@pytest.mark.parametrize("method", ["dop853", "vern9"])
+def test_sigma_clock_reports_a_failure_with_the_rows_before_it(method):
     """A step budget that runs out mid-way returns the rows computed so far and says why."""
-    res, _ = _stiefel_sigma_run(np.linspace(0.0, 20 * 86400.0, 11))
+    res, _ = _stiefel_sigma_run(np.linspace(0.0, 20 * 86400.0, 11), method)
     full = res.stats["n_accepted"]
     from tetherlab.kernel.layout import FORM_DROMO_SIGMA
     from tetherlab.pipeline import prepare
@@ -252,7 +257,7 @@ def test_sigma_clock_reports_a_failure_with_the_rows_before_it():
     mu = prep.mu_m3_s2
     L = float(np.linalg.norm(prep.y0[:3]))
     pe = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
-    cut = dromo.integrate_sigma("dop853", pe, prep.y0[:3], prep.y0[3:6], res.t, 1e-11, 1e-11, mu, L,
+    cut = dromo.integrate_sigma(method, pe, prep.y0[:3], prep.y0[3:6], res.t, 1e-11, 1e-11, mu, L,
                                 max_steps=full // 2)  # fmt: skip
     assert cut.status == 1 and "step" in cut.message.lower()
     assert 1 <= cut.t.size < res.t.size

@@ -23,6 +23,7 @@ from tetherlab.integrators import (
     radau5_run,
     radau5_workspace,
     tableau,
+    vern9_run,
     warm_up,
 )
 from tetherlab.integrators.radau5 import lu_factor, lu_solve
@@ -122,7 +123,7 @@ def run_kernel(kernel, rhs, t0, y0, t_out, rtol, atol, h=0.0, h_max=0.0, max_ste
     return res, y, y_out, stats
 
 
-KERNELS = {"dop853": dop853_run, "radau5": radau5_run}
+KERNELS = {"dop853": dop853_run, "vern9": vern9_run, "radau5": radau5_run}
 
 
 # ------------------------------------------------------------------------------------------------
@@ -131,6 +132,7 @@ KERNELS = {"dop853": dop853_run, "radau5": radau5_run}
 def test_tableaus_pass_their_checks():
     # The import already ran them; run again explicitly so a regression shows here by name.
     tableau._check_dop853()
+    tableau._check_vern9()
     tableau._check_radau()
     check_tableau("DOP853", tableau.DOP_A, tableau.DOP_B, tableau.DOP_C, order=8)
     check_tableau("Radau IIA", tableau.RADAU_A, tableau.RADAU_B, tableau.RADAU_C, order=5)
@@ -201,6 +203,17 @@ def test_order_dop853_is_8():
     assert abs(-slope - 8.0) < 0.5, (slope, errs)  # DOP853 has order 8 (Hairer I, II.10)
 
 
+def test_order_vern9_is_9():
+    # Verner's pair has order 9 (every tree condition: tests/test_vern9.py); here the slope of
+    # the fixed-step error.  Errors 4.8e-12 (8 steps) .. 2.7e-14 (14 steps), above round-off
+    # (1e-15).  Local slopes fall from 9.5 (6 steps) to 9.2 (14): a large order-10 term, so the
+    # coarse steps are left out.  A lost order (8) or a wrong digit (order <= 8) fails by > 1.
+    steps = np.array([8, 10, 12, 14])
+    errs = _fixed_step_errors(vern9_run, steps, 1e-10)
+    slope = np.polyfit(np.log(steps), np.log(errs), 1)[0]
+    assert abs(-slope - 9.0) < 0.5, (slope, errs)
+
+
 def test_order_radau5_is_5():
     # Radau IIA with s = 3 has order 2s - 1 = 5 at step ends (Hairer & Wanner II, IV.5).  Errors
     # 4e-6 .. 4e-12 for 8..128 steps; rtol 1e-13 makes the Newton tolerance negligible there.
@@ -224,16 +237,18 @@ def _rms_units(y, exact, rtol, atol):
     return np.max(np.sqrt(np.mean(w * w, axis=1)))
 
 
+@pytest.mark.parametrize("method", ["dop853", "vern9"])
 @pytest.mark.parametrize("rtol", [1e-6, 1e-8, 1e-10])
-def test_dop853_kepler_error_in_tolerance_units(rtol):
+def test_explicit_kepler_error_in_tolerance_units(method, rtol):
     # The controller bounds the *local* error of each step by ~1 tolerance unit; over one orbit
     # (15-50 steps) the global error is the propagated sum, and on the e = 0.5 orbit an error in
     # energy becomes a phase error that grows along the orbit (~3 pi da/a per revolution).
     # Measured 2.9, 7.6, 25.6 units; scipy's DOP853 gives the same numbers (and both reach ~70 at
     # rtol 1e-12: DOP853's tolerance proportionality is not perfect), so 50 is a bound with
     # margin that a broken controller, error norm or tableau (errors >> 100 units) exceeds.
+    # Vern9 (error estimate of its order-8 embedded solution, safety 0.8) sits lower still.
     t_out = np.linspace(0.0, PERIOD, 9)
-    (status, _, _, _), _, y_out, stats = run_kernel(dop853_run, kepler, 0.0, Y0_KEPLER, t_out,
+    (status, _, _, _), _, y_out, stats = run_kernel(KERNELS[method], kepler, 0.0, Y0_KEPLER, t_out,
                                                     rtol, rtol)  # fmt: skip
     assert status == 0
     units = _rms_units(y_out, kepler_exact(t_out), rtol, rtol)
@@ -255,7 +270,7 @@ def test_radau5_kepler_error_in_tolerance_units(rtol):
     assert units < 50.0, units
 
 
-@pytest.mark.parametrize("method,rtol", [("dop853", 1e-10), ("radau5", 1e-8)])
+@pytest.mark.parametrize("method,rtol", [("dop853", 1e-10), ("vern9", 1e-10), ("radau5", 1e-8)])
 def test_dense_output_matches_kepler_between_steps(method, rtol):
     t_out = np.linspace(0.0, PERIOD, 2001)
     (status, _, _, _), _, y_out, stats = run_kernel(KERNELS[method], kepler, 0.0, Y0_KEPLER,
@@ -263,7 +278,7 @@ def test_dense_output_matches_kepler_between_steps(method, rtol):
     assert status == 0
     # Far more outputs than steps: nearly all outputs are interior points of a step.
     assert stats[0] * 10 < t_out.size
-    tol = rtol if method == "dop853" else 0.1 * rtol ** (2.0 / 3.0)
+    tol = 0.1 * rtol ** (2.0 / 3.0) if method == "radau5" else rtol
     err_dense = _tol_units(y_out, kepler_exact(t_out), tol, tol)
     # Interpolation error (7th-order interpolant / collocation polynomial) must stay at the level
     # of the integration error itself, not orders above it.
@@ -370,7 +385,7 @@ def x_event(t, y, g, p):
     return 0
 
 
-@pytest.mark.parametrize("method", ["dop853", "radau5"])
+@pytest.mark.parametrize("method", ["dop853", "vern9", "radau5"])
 def test_events_are_located_to_round_off_and_outputs_are_untouched(method):
     # x = cos t crosses 0.5 at pi/3 and 5 pi/3 and 0 at pi/2 and 3 pi/2 (exact).
     t_out = np.linspace(0.0, 6.0, 61)
@@ -392,7 +407,7 @@ def test_events_are_located_to_round_off_and_outputs_are_untouched(method):
     np.testing.assert_allclose(res.y, plain.y, atol=1e-8)
 
 
-@pytest.mark.parametrize("method", ["dop853", "radau5"])
+@pytest.mark.parametrize("method", ["dop853", "vern9", "radau5"])
 def test_kink_at_event_keeps_full_accuracy(method):
     # Without event location a step straddles each kink of kinked_osc and its dense output
     # and error estimate see a non-smooth solution; with it, every step lies on one branch.
@@ -402,11 +417,11 @@ def test_kink_at_event_keeps_full_accuracy(method):
     assert res.status == 0
     assert len(res.events) == 8  # two kinks per period of 3 pi/2, 4 periods
     err = np.max(np.abs(res.y[:, 0] - kinked_exact(t_out)))
-    tol_i = 1e-11 if method == "dop853" else 0.1 * 1e-11 ** (2.0 / 3.0)
+    tol_i = 0.1 * 1e-11 ** (2.0 / 3.0) if method == "radau5" else 1e-11
     assert err < 100 * tol_i, err  # measured in units of the (internal) tolerance
 
 
-@pytest.mark.parametrize("method", ["dop853", "radau5"])
+@pytest.mark.parametrize("method", ["dop853", "vern9", "radau5"])
 def test_terminal_event_stops_with_the_stop_state_last(method):
     t_out = np.linspace(0.0, 6.0, 7)
     res = integrate(method, osc, 0.0, [1.0, 0.0], t_out, NO_P, 1e-12, 1e-12, event=osc_events,
@@ -432,7 +447,7 @@ def test_event_arguments_are_checked():
 # ------------------------------------------------------------------------------------------------
 # failures
 # ------------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("method", ["dop853", "radau5"])
+@pytest.mark.parametrize("method", ["dop853", "vern9", "radau5"])
 def test_rhs_status_failure_keeps_earlier_outputs(method):
     t_out = np.linspace(0.0, 3.0, 31)
     (status, t_end, _, n_done), y, y_out, stats = run_kernel(
@@ -451,7 +466,7 @@ def test_rhs_status_failure_keeps_earlier_outputs(method):
     assert res.y.shape == (15, 2) and np.array_equal(res.t, t_out[:15])
 
 
-@pytest.mark.parametrize("method", ["dop853", "radau5"])
+@pytest.mark.parametrize("method", ["dop853", "vern9", "radau5"])
 def test_nan_rhs_fails_cleanly(method):
     t_out = np.linspace(0.0, 3.0, 31)
     res = integrate(method, osc_nan_after_1p5, 0.0, [1.0, 0.0], t_out, NO_P, 1e-8, 1e-8)
@@ -530,7 +545,7 @@ def test_radau5_workspace_continuation_is_bitwise_and_plain_restart_is_close():
     assert np.all(np.abs(out - ref) <= 1e-4 * (1.0 + np.abs(ref)))
 
 
-@pytest.mark.parametrize("method", ["dop853", "radau5"])
+@pytest.mark.parametrize("method", ["dop853", "vern9", "radau5"])
 def test_driver_chunking_does_not_change_results(method):
     t_out = np.linspace(0.0, 10 * PERIOD, 40)  # > 250 steps: many chunks after the first 64
     one = integrate(method, kepler, 0.0, Y0_KEPLER, t_out, NO_P, 1e-9, 1e-9, chunk_seconds=1e3)
@@ -649,19 +664,21 @@ def test_bad_method_lists_valid_ones():
         integrate(**{**GOOD, "method": "lsoda"})
 
 
-def test_dop853_step_is_the_kernels_fixed_step():
-    """dop853_step (used by DROMO's output clock) is exactly one step of the kernel."""
-    from tetherlab.integrators.dop853 import dop853_step
+@pytest.mark.parametrize("method,n_rhs", [("dop853", 12), ("vern9", 16)])
+def test_erk_step_is_the_kernels_fixed_step(method, n_rhs):
+    """erk_step (used by DROMO's output clock) is exactly one step of the kernel."""
+    from tetherlab.integrators.erk import DOP853, K_ROWS, VERN9, erk_step
 
     h = 0.37
-    (s, t, _, _), y_kernel, _, _ = run_kernel(dop853_run, kepler, 0.0, Y0_KEPLER, np.array([h]),
-                                               1e-9, 1e-9, h=h, fixed_step=True)  # fmt: skip
+    (s, t, _, _), y_kernel, _, _ = run_kernel(KERNELS[method], kepler, 0.0, Y0_KEPLER,
+                                               np.array([h]), 1e-9, 1e-9, h=h, fixed_step=True)  # fmt: skip
     assert s == 0 and t == h
-    K = np.empty((16, 4))
+    K = np.empty((K_ROWS, 4))
     y_new = np.empty(4)
     stats = np.zeros(8, dtype=np.int64)
-    st = dop853_step(kepler, 0.0, Y0_KEPLER.copy(), h, NO_P, K, np.empty(4), y_new, stats)
-    assert st == 0 and stats[2] == 12
+    kind = VERN9 if method == "vern9" else DOP853
+    st = erk_step(kind, kepler, 0.0, Y0_KEPLER.copy(), h, NO_P, K, np.empty(4), y_new, stats)
+    assert st == 0 and stats[2] == n_rhs
     assert np.array_equal(y_new, y_kernel)
 
 

@@ -68,6 +68,7 @@ SIDES = ("up", "down")
 MOTIONS = ("corotating", "translating", "equilibrium")
 INTEGRATOR_METHODS = (
     "dop853",
+    "vern9",
     "radau5",
     "scipy:DOP853",
     "scipy:Radau",

@@ -17,9 +17,10 @@ Two forms, both compiled cfuncs with the integrators' RHS_SIG:
   elements with sigma as a state, the rods' d_i, d_i' exactly as in Cowell,
   state y = [sigma, q1, q2, q3, eta1..eta4, d_1..d_N, d_1'..d_N'].
 
-Output at physical times with the sigma form (:func:`integrate_sigma`): with DOP853, inside the
-compiled loop (:func:`_clock_run`): an event tau = t_k/T located on the dense output, then one
-DOP853 step from the crossing step's start to the located sigma; with the other methods, sigma
+Output at physical times with the sigma form (:func:`integrate_sigma`): with DOP853 or Vern9,
+inside the compiled loop (:func:`_clock_run`): an event tau = t_k/T located on the dense output,
+then one step of the same method from the crossing step's start to the located sigma; with the
+other methods (RADAU5, scipy), sigma
 is integrated on a coarse grid (8 points a revolution) and t(sigma) = t_k is solved by a
 safeguarded Newton iteration whose evaluations are short integrations from the bracketing grid
 state (dt/dsigma = T/(q3^3 s^2) is the Newton derivative).  Docs/dromo.md section 5 says why.
@@ -47,7 +48,11 @@ from ..integrators.dop853 import MAX_STEPS as MAX_STEPS_STATUS
 from ..integrators.dop853 import NON_FINITE as NON_FINITE_STATUS
 from ..integrators.dop853 import OK as OK_STATUS
 from ..integrators.dop853 import RHS_FAILED as RHS_FAILED_STATUS
-from ..integrators.dop853 import ST_ACCEPTED, ST_RHS_STATUS, dop853_core, dop853_step
+from ..integrators.dop853 import ST_ACCEPTED, ST_RHS_STATUS
+from ..integrators.erk import DOP853 as ERK_DOP853
+from ..integrators.erk import K_ROWS as ERK_K_ROWS
+from ..integrators.erk import VERN9 as ERK_VERN9
+from ..integrators.erk import erk_core, erk_step
 from ..tether.chain import accelerations
 
 # Formulation block (at p[H_OFF_FORM]): mu, L, T, Cowell state length, DROMO state length;
@@ -232,12 +237,13 @@ def dromo_time_rhs(t, y_ptr, dy_ptr, p_ptr):
 
 
 @njit(cache=True)
-def _clock_run(rhs, event, sig, z, h, targets, k, p, rtol, atol, sig_max, max_steps, out_sig, out_z,
-               stats):  # fmt: skip
+def _clock_run(kind, rhs, event, sig, z, h, targets, k, p, rtol, atol, sig_max, max_steps, out_sig,
+               out_z, stats):  # fmt: skip
     """Sigma-form outputs k, k+1, ... at the non-dimensional times ``targets`` (compiled loop).
 
-    DOP853 runs with the event g = tau - targets[k]; at a crossing it returns with (sig, z) at
-    the start of the crossing step and the located sigma in ev[0].  One DOP853 step from there to
+    The explicit method ``kind`` (DOP853 or Vern9, :mod:`tetherlab.integrators.erk`) runs with
+    the event g = tau - targets[k]; at a crossing it returns with (sig, z) at the start of the
+    crossing step and the located sigma in ev[0].  One step of the same method from there to
     ev[0] gives output k; the target moves on and the integration restarts from the same step
     start (redoing that step), so outputs do not move the path (a restart only forgets the
     controller's last rejection, which caps the next step).  Returns (status, sig, h, k, sig_max); status MAX_STEPS after ``max_steps`` accepted steps (the caller continues).
@@ -248,7 +254,7 @@ def _clock_run(rhs, event, sig, z, h, targets, k, p, rtol, atol, sig_max, max_st
     ev = np.zeros(4)
     tout = np.empty(1)
     yout = np.empty((1, n))
-    K = np.empty((16, n))
+    K = np.empty((ERK_K_ROWS, n))
     ys = np.empty(n)
     znew = np.empty(n)
     acc0 = stats[ST_ACCEPTED]
@@ -268,10 +274,10 @@ def _clock_run(rhs, event, sig, z, h, targets, k, p, rtol, atol, sig_max, max_st
         ev[1] = -1.0
         ev[2] = -1.0
         ev[3] = 0.0
-        st, sig, h, nd = dop853_core(rhs, sig, z, tout, p, rtol, atol, h, 0.0, left, yout, stats,
-                                     False, event, 1, ev)  # fmt: skip
+        st, sig, h, nd = erk_core(kind, rhs, sig, z, tout, p, rtol, atol, h, 0.0, left, yout, stats,
+                                  False, event, 1, ev)  # fmt: skip
         if st == EVENT_STATUS:
-            st2 = dop853_step(rhs, sig, z, ev[0] - sig, p, K, ys, znew, stats)
+            st2 = erk_step(kind, rhs, sig, z, ev[0] - sig, p, K, ys, znew, stats)
             if st2 != 0:
                 if st2 > 0:
                     stats[ST_RHS_STATUS] = st2
@@ -494,16 +500,16 @@ def integrate_sigma(method, p_ext, r0_m, v0_m_s, t_out, rtol, atol, mu, length_m
     """Sigma form for a point mass, with the state reported at the physical times ``t_out`` (s).
 
     Returns an IntegrationResult with Cartesian rows [r, v] (m, m/s) at ``t_out``.  ``atol`` is in
-    the units of the non-dimensional state (a scalar).  DOP853 finds the output sigmas in its
-    compiled loop (:func:`_integrate_sigma_clock`); the other methods use the sigma grid and a
+    the units of the non-dimensional state (a scalar).  DOP853 and Vern9 find the output sigmas in
+    their compiled loop (:func:`_integrate_sigma_clock`); the other methods use the sigma grid and a
     Newton search (:func:`_integrate_sigma_grid`).  See the module docstring.
     """
     tt = np.asarray(t_out, float)
     if tt.ndim != 1 or tt.size == 0 or np.any(np.diff(tt) < 0) or tt[0] < 0:
         raise ValueError(f"t_out: expected non-decreasing times >= 0 s; got {tt!r}")
-    if method == "dop853":
-        return _integrate_sigma_clock(p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0,
-                                      max_steps, progress)  # fmt: skip
+    if method in ("dop853", "vern9"):
+        return _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m,
+                                      sigma0, max_steps, progress)  # fmt: skip
     return _integrate_sigma_grid(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0,
                                  max_steps, progress, grid_per_rev)  # fmt: skip
 
@@ -512,11 +518,12 @@ def integrate_sigma(method, p_ext, r0_m, v0_m_s, t_out, rtol, atol, mu, length_m
 CLOCK_CHUNK_STEPS = 200_000
 
 
-def _integrate_sigma_clock(p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0, max_steps,
-                           progress):  # fmt: skip
-    """DOP853 in sigma with the output times found inside the compiled loop (:func:`_clock_run`).
+def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0,
+                           max_steps, progress):  # fmt: skip
+    """DOP853 or Vern9 in sigma with the output times found inside the compiled loop
+    (:func:`_clock_run`).
 
-    Each output row comes from one extra DOP853 step, from the start of the step in which tau
+    Each output row comes from one extra step of the method, from the start of the step in which tau
     crosses tau_k to the sigma located on that step's dense output; the main integration then
     goes on from that step's start, so the trajectory does not depend on the output times.  The
     small residual g = t_k - t(sigma_k) (the located sigma's bracket, and the interpolant's error
@@ -538,12 +545,13 @@ def _integrate_sigma_clock(p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, si
     out_sig = np.empty(m)
     out_z = np.empty((m, 8))
     stats = np.zeros(8, dtype=np.int64)
-    compile_s = warm_up("dop853", dromo_sigma_rhs, 8, p_ext)
+    compile_s = warm_up(method, dromo_sigma_rhs, 8, p_ext)
+    kind = ERK_VERN9 if method == "vern9" else ERK_DOP853
     t0 = time.perf_counter()
     sig, h, k, budget, status = float(sigma0), 0.0, 0, int(max_steps), OK_STATUS
     while k < m:
         acc = int(stats[ST_ACCEPTED])
-        status, sig, h, k, sig_max = _clock_run(dromo_sigma_rhs, dromo_clock_event, sig, z, h, targets,
+        status, sig, h, k, sig_max = _clock_run(kind, dromo_sigma_rhs, dromo_clock_event, sig, z, h, targets,
                                                 k, p_ext, float(rtol), atol_v, sig_max,
                                                 min(CLOCK_CHUNK_STEPS, budget), out_sig, out_z, stats)  # fmt: skip
         budget -= int(stats[ST_ACCEPTED]) - acc

@@ -4,6 +4,7 @@ Kernels (numba, ``cache=True``; one call runs the whole step loop and every rhs 
 
     status, t_end, h_next, n_done = dop853_run(rhs, t, y, t_out, p, rtol, atol, h, h_max,
                                                max_steps, y_out, stats, fixed_step)
+    status, t_end, h_next, n_done = vern9_run(...same...)
     status, t_end, h_next, n_done = radau5_run(...same...)
 
 * ``y`` (float64[n]) is overwritten with the state at ``t_end``; rows 0..n_done-1 of ``y_out``
@@ -25,7 +26,7 @@ error in units of the requested tolerance is larger than DOP853's; see :mod:`.ra
 Use :func:`integrate` for validation, chunking, progress and scipy cross-checks.
 """
 
-from .dop853 import dop853_run
+from .erk import dop853_run, erk_core, vern9_run
 from .driver import METHODS, IntegrationResult, integrate, warm_up
 from .radau5 import radau5_core, radau5_run, radau5_workspace
 from .tableau import TableauError, check_tableau
@@ -36,9 +37,11 @@ __all__ = [
     "TableauError",
     "check_tableau",
     "dop853_run",
+    "erk_core",
     "integrate",
     "radau5_core",
     "radau5_run",
     "radau5_workspace",
+    "vern9_run",
     "warm_up",
 ]

@@ -5,11 +5,13 @@ Reference: E. Hairer, S.P. Norsett, G. Wanner, "Solving Ordinary Differential Eq
 error norm, HINIT, dense output CONTD8).  The coefficients come from :mod:`.tableau` (checked at
 import).
 
-The whole step loop, the calls of the right-hand side (a cfunc with :data:`tetherlab._jit.RHS_SIG`)
-and the dense output are one compiled function: no Python runs between steps.
+This module holds the method's own pieces (stages, solution, Hairer's error norm, the dense
+output CONTD8); the step loop, shared with Vern9, is :func:`tetherlab.integrators.erk.erk_core`:
+the loop, the calls of the right-hand side (a cfunc with :data:`tetherlab._jit.RHS_SIG`) and the
+dense output are one compiled function, so no Python runs between steps.
 
-This module also holds the small helpers shared with :mod:`.radau5` (status codes, HINIT, output
-at the start time), so both kernels behave the same at their boundaries.
+It also holds the small helpers shared by every kernel (status codes, HINIT, output at the start
+time, event bookkeeping), so all kernels behave the same at their boundaries.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ MAX_STEPS = 1
 STEP_UNDERFLOW = 2
 RHS_FAILED = 3
 NON_FINITE = 4
-EVENT = 5  # an event function changed sign in the step; see dop853_core / radau5_core
+EVENT = 5  # an event function changed sign in the step; see erk_core / radau5_core
 
 # stats[] slots (int64[8], accumulated across calls).
 ST_ACCEPTED = 0
@@ -302,226 +304,3 @@ def event_time_tolerance(t, h):
 
 
 event_time_tolerance = njit(cache=True)(event_time_tolerance)
-
-
-@njit(cache=True)
-def dop853_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats, fixed_step):
-    """The kernel ABI without events: :func:`dop853_core` with no event function."""
-    ev = np.array([0.0, -1.0, -1.0, 0.0])
-    return dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
-                       fixed_step, rhs, 0, ev)  # fmt: skip
-
-
-@njit(cache=True)
-def dop853_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats, fixed_step,
-                event, ne, ev):  # fmt: skip
-    """Integrate y' = rhs(t, y) from t to t_out[-1]; see the package docstring for the contract.
-
-    Events: ``event(t, y_ptr, g_ptr, p_ptr)`` (the rhs ABI) writes ``ne`` values g; after each
-    accepted step the kernel checks whether any changed side (g < 0 vs g >= 0).  If one did, the
-    step is *not* committed: the earliest crossing is bracketed by bisection on the step's dense
-    output to :func:`event_time_tolerance`, ``ev[0]`` gets the bracket's right end (where the
-    component is already on its new side), ``ev[1]`` the component, ``ev[2:4]`` the component and
-    its new-side value for the restart (:func:`apply_forced_side`), and the kernel returns EVENT
-    with (t, y) still the state at the step's start.  The caller then integrates exactly to
-    ev[0] (so a kink in the rhs at the event never lies inside a step) and restarts there.  Two
-    crossings of one component inside a single step cancel and are not seen.
-
-    Returns (status, t_end, h_next, n_done).  ``y`` is overwritten with the state at t_end; rows
-    0..n_done-1 of ``y_out`` hold the solution at t_out[0..n_done-1].  ``max_steps`` counts
-    accepted steps of this call; the call returns right after an accepted step, so a caller that
-    continues from (t_end, y, h_next) reproduces a single long call bit for bit (the only state
-    carried between DOP853 steps is h and f(t, y), which is recomputed identically).
-    """
-    n = y.shape[0]
-    m = t_out.shape[0]
-    n_done = fill_start_outputs(t, y, t_out, y_out)
-    if n_done == m:
-        return OK, t, h, n_done
-    t_end = t_out[m - 1]
-
-    K = np.empty((16, n))
-    ys = np.empty(n)
-    y_new = np.empty(n)
-    F = np.empty((7, n))
-
-    st = rhs(t, ptr(y), row_ptr(K, 0), ptr(p))
-    stats[ST_NRHS] += 1
-    if st != 0:
-        stats[ST_RHS_STATUS] = st
-        return RHS_FAILED, t, h, n_done
-    if not all_finite(K[0]):
-        return NON_FINITE, t, h, n_done
-    st, gold, gnew, gtmp = start_events(event, t, y, p, ne, ev, stats)
-    if st != 0:
-        return RHS_FAILED, t, h, n_done
-
-    hmax = h_max if h_max > 0.0 else np.inf
-    if h <= 0.0:
-        if fixed_step:
-            return STEP_UNDERFLOW, t, h, n_done  # the driver rejects this before calling
-        h = hinit(rhs, t, y, K[0], p, rtol, atol, 8, min(hmax, t_end - t), ys, y_new, stats)
-    h = min(h, hmax)
-
-    n_acc = 0
-    n_rej = 0  # consecutive rejections of any kind
-    n_bad = 0  # consecutive failures caused by the rhs (status or non-finite values)
-    bad_kind = 0  # RHS_FAILED or NON_FINITE: cause of the most recent failed trial, 0 if none
-    reject = False
-    # Fixed steps: a relative slack so that N steps of T/N land on T without a sliver step.
-    land = 1.0 + 1e-9 if fixed_step else 1.01
-
-    while True:
-        if h < UNDERFLOW_FACTOR * abs(t) or h < H_FLOOR or n_rej >= MAX_CONSECUTIVE_REJECTS:
-            code = bad_kind if (n_rej > 0 and bad_kind != 0) else STEP_UNDERFLOW
-            return code, t, h, n_done
-        h_unclipped = h
-        last = False
-        if t + land * h >= t_end:
-            h = t_end - t
-            last = True
-
-        fail = 0
-        have_dense = False
-        t_new = t_end if last else t + h
-        st = _dop_stages(rhs, t, y, h, p, K, ys, stats)
-        if st != 0:
-            stats[ST_RHS_STATUS] = st
-            fail = RHS_FAILED
-        else:
-            _dop_combine(y, K, h, y_new)
-            if fixed_step:
-                err = 0.0
-                if not all_finite(y_new):
-                    fail = NON_FINITE
-            else:
-                err = _dop_error(y, y_new, K, h, rtol, atol)
-                if not np.isfinite(err):
-                    fail = NON_FINITE
-        if fail == 0 and err <= 1.0:
-            # Every evaluation the step needs happens before it is committed, so a failure in
-            # f(t+h, y_new) or in a dense-output stage rejects the step instead of leaving an
-            # accepted state that cannot be continued.
-            st = rhs(t + h, ptr(y_new), row_ptr(K, 12), ptr(p))
-            stats[ST_NRHS] += 1
-            if st != 0:
-                stats[ST_RHS_STATUS] = st
-                fail = RHS_FAILED
-            elif not all_finite(K[12]):
-                fail = NON_FINITE
-            else:
-                # Dense stages only on steps with an output time strictly inside (t, t_new).
-                if n_done < m and t_out[n_done] < t_new:
-                    have_dense = True
-                    st = _dop_dense_stages(rhs, t, y, h, p, K, ys, stats)
-                    if st == -1:
-                        fail = NON_FINITE
-                    elif st != 0:
-                        stats[ST_RHS_STATUS] = st
-                        fail = RHS_FAILED
-
-        if fail != 0:
-            if fixed_step:
-                return fail, t, h, n_done
-            stats[ST_REJECTED] += 1
-            n_rej += 1
-            n_bad += 1
-            bad_kind = fail
-            if n_bad >= MAX_BAD_TRIALS:
-                return fail, t, h, n_done
-            reject = True
-            h = 0.25 * h
-            continue
-
-        if fixed_step:
-            hnew = h_unclipped
-        else:
-            # Hairer's controller with beta = 0: fac limits 0.333 <= hnew/h <= 6, safety 0.9.
-            fac11 = err**0.125
-            fac = max(1.0 / 6.0, min(1.0 / 0.333, fac11 / 0.9))
-            hnew = h / fac
-            if err > 1.0:
-                hnew = h / min(1.0 / 0.333, fac11 / 0.9)
-                reject = True
-                stats[ST_REJECTED] += 1
-                n_rej += 1
-                bad_kind = 0
-                h = hnew
-                continue
-
-        # ---- events (before anything is committed) ----
-        if ne > 0:
-            st = event(t_new, ptr(y_new), ptr(gnew), ptr(p))
-            if st != 0:
-                stats[ST_RHS_STATUS] = st
-                return RHS_FAILED, t, h, n_done
-            if first_crossing(gold, gnew, ne):
-                if not have_dense:
-                    st = _dop_dense_stages(rhs, t, y, h, p, K, ys, stats)
-                    if st != 0:
-                        if st > 0:
-                            stats[ST_RHS_STATUS] = st
-                        return (RHS_FAILED if st > 0 else NON_FINITE), t, h, n_done
-                _dop_dense_coeffs(y, y_new, K, h, F)
-                tol = event_time_tolerance(t_new, h)
-                best = 1.0
-                comp = -1
-                for i in range(ne):
-                    if (gold[i] < 0.0) == (gnew[i] < 0.0):
-                        continue
-                    a = 0.0
-                    b = 1.0
-                    for _ in range(200):
-                        if (b - a) * h <= tol:
-                            break
-                        mid = 0.5 * (a + b)
-                        _dop_dense_eval(y, F, mid, ys)
-                        st = event(t + mid * h, ptr(ys), ptr(gtmp), ptr(p))
-                        if st != 0:
-                            stats[ST_RHS_STATUS] = st
-                            return RHS_FAILED, t, h, n_done
-                        if (gtmp[i] < 0.0) == (gold[i] < 0.0):
-                            a = mid
-                        else:
-                            b = mid
-                    if comp < 0 or b < best:
-                        best = b
-                        comp = i
-                ev[0] = t_new if best >= 1.0 else t + best * h
-                ev[1] = comp
-                ev[2] = comp
-                ev[3] = 0.0 if gold[comp] < 0.0 else -1.0
-                return EVENT, t, h_unclipped, n_done
-            for i in range(ne):
-                gold[i] = gnew[i]
-
-        # ---- accept ----
-        if n_done < m and t_out[n_done] < t_new:
-            _dop_dense_coeffs(y, y_new, K, h, F)
-            while n_done < m and t_out[n_done] < t_new:
-                _dop_dense_eval(y, F, (t_out[n_done] - t) / h, y_out[n_done])
-                n_done += 1
-        # Output times equal to t_new get the step's own end value, not the interpolant.
-        while n_done < m and t_out[n_done] <= t_new:
-            y_out[n_done, :] = y_new
-            n_done += 1
-        t = t_new
-        for i in range(n):
-            y[i] = y_new[i]
-            K[0, i] = K[12, i]
-        stats[ST_ACCEPTED] += 1
-        n_acc += 1
-        n_rej = 0
-        n_bad = 0
-        bad_kind = 0
-
-        hnew = min(hnew, hmax)
-        if reject:
-            hnew = min(hnew, h)
-        reject = False
-        if last:
-            # The clipped last step says little about the natural step; hand back the larger.
-            return OK, t, min(max(hnew, h_unclipped), hmax), n_done
-        h = hnew
-        if n_acc >= max_steps:
-            return MAX_STEPS, t, h, n_done

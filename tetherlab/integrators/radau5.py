@@ -326,7 +326,7 @@ def radau5_core(
 ):
     """RADAU5 with an explicit workspace; ``resume`` continues from the state it holds.
 
-    Events (``event``, ``ne``, ``ev``) as in :func:`tetherlab.integrators.dop853.dop853_core`,
+    Events (``event``, ``ne``, ``ev``) as in :func:`tetherlab.integrators.erk.erk_core`,
     located on the step's collocation polynomial; an EVENT return leaves the workspace of the
     uncommitted step, so the caller restarts fresh (``resume=False``) after it.
 

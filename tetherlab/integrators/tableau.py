@@ -14,6 +14,13 @@ DOP853 (Hairer, Norsett & Wanner, "Solving ODEs I", 2nd ed., section II.10; Fort
     change.  Stages 0..11 are the method, row 12 is f(t+h, y_new) (first same as last), rows
     13..15 are the three extra stages of the 7th-order dense output.
 
+Vern9: Verner's "most efficient" 9(8) pair with an order-8 interpolant (J.H. Verner, Numer.
+    Algorithms 53 (2010) 383-396)
+    The 40-digit decimals live in :mod:`.vern9_coefficients`; here they are rounded to float64 and
+    checked (row sums, weights, quadrature orders, the first-same-as-last row, the interpolant's
+    end values).  tests/test_vern9.py checks every rooted-tree order condition in rational
+    arithmetic.
+
 Radau IIA, 3 stages, order 5 (Hairer & Wanner, "Solving ODEs II", 2nd ed., section IV.8, Table 5.6
     and the code RADAU5)
     The collocation coefficients are written in closed form in sqrt(6).  The transformation T that
@@ -27,6 +34,8 @@ import math
 
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _dop
+
+from . import vern9_coefficients as _v9
 
 #: Tolerance of the import-time checks.  Sums of O(1) coefficients in double precision are exact
 #: to a few ulps; 1e-14 leaves room for that and nothing else.
@@ -101,6 +110,64 @@ def _check_dop853():
         and DOP_E3[12] == 0.0
     ):
         raise TableauError("DOP853: stage 12 is not the first-same-as-last stage f(t+h, y_new)")
+
+
+# --------------------------------------------------------------------------------------------
+# Vern9 (Verner's efficient 9(8) pair, order-8 interpolant)
+# --------------------------------------------------------------------------------------------
+V9_N_STAGES = 16  # stages of one step (0..15); stage 16 = f(t + h, y_new); 17..20 interpolant
+V9_N_ALL = 21
+V9_N_DENSE = 8  # interpolant polynomial degree (b_s(theta) = sum_k P[s, k] theta^(k + 1))
+
+
+def _v9_array(table, shape):
+    out = np.zeros(shape)
+    for i, v in table.items():
+        if isinstance(v, dict):
+            for j, x in v.items():
+                out[i, j] = float(x)
+        else:
+            out[i] = float(v)
+    return out
+
+
+V9_A = _v9_array(_v9.A, (V9_N_ALL, V9_N_ALL))
+V9_B = _v9_array(_v9.B, (V9_N_STAGES,))
+V9_C = _v9_array(_v9.C, (V9_N_ALL,))
+V9_E = _v9_array(_v9.E, (V9_N_STAGES,))  # b_low - b_high
+V9_P = _v9_array(_v9.P, (V9_N_ALL, V9_N_DENSE))
+#: The interpolant's weights at theta = 1 in float64 differ from b by up to ~1.4e-12: its
+#: polynomial coefficients reach 1.3e4 and cancel (exactly, in the 40-digit decimals: 7e-36).
+#: Outputs between steps carry that relative error on the step's increment h f (documented in
+#: :mod:`.vern9`); the end of a step always uses b itself.
+V9_DENSE_ROUNDING = 2e-12
+
+
+def _check_vern9():
+    a, b, c, e, P = V9_A, V9_B, V9_C, V9_E, V9_P
+    check_tableau("Vern9", a, b, c, order=9)
+    check_tableau("Vern9 embedded", a[:V9_N_STAGES, :V9_N_STAGES], b + e, c[:V9_N_STAGES], order=8)
+    if not abs(e.sum()) <= CHECK_TOL:
+        raise TableauError(f"Vern9: sum(E) = {e.sum()!r}, expected 0")
+    if np.any(np.triu(a) != 0.0):
+        raise TableauError("Vern9: A is not strictly lower triangular")
+    # The kernel evaluates row 16 as f(t + h, y_new) after the error test and reuses it as the
+    # first stage of the next step; that needs row 16 = b at c = 1.
+    if not (np.array_equal(a[16, :16], b) and c[16] == 1.0 and np.all(a[16, 16:] == 0.0)):
+        raise TableauError("Vern9: stage 16 is not the first-same-as-last stage f(t+h, y_new)")
+    # Interpolant: b(1) = b (with zeros for the extra stages) and b(0) = 0 by construction;
+    # quadrature conditions sum_s b_s(theta) c_s^(k-1) = theta^k / k, k = 1..8, at theta = 1/2.
+    end = P.sum(axis=1)
+    ref = np.concatenate([b, np.zeros(V9_N_ALL - V9_N_STAGES)])
+    if not np.all(np.abs(end - ref) <= V9_DENSE_ROUNDING):
+        raise TableauError(f"Vern9: interpolant at theta = 1 differs from b by "
+                           f"{np.abs(end - ref).max():.3e}")  # fmt: skip
+    th = 0.5
+    bt = P @ th ** np.arange(1, V9_N_DENSE + 1)
+    for k in range(1, V9_N_DENSE + 1):
+        q = float(bt @ c ** (k - 1))
+        if not abs(q - th**k / k) <= V9_DENSE_ROUNDING:
+            raise TableauError(f"Vern9: interpolant quadrature k={k} off by {q - th**k / k:.3e}")
 
 
 # --------------------------------------------------------------------------------------------
@@ -188,4 +255,5 @@ def _check_radau():
 
 
 _check_dop853()
+_check_vern9()
 _check_radau()
