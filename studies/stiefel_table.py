@@ -2,7 +2,7 @@
 
     python studies/stiefel_table.py OUTDIR
 
-For each formulation (Cowell, DROMO sigma form) and integrator (dop853, radau5) and each tolerance
+For each formulation (Cowell, DROMO sigma form), integrator (dop853, vern9, radau5) and tolerance
 1e-4 ... 1e-13 (rtol = atol): the final-position error against references/stiefel/reference.json
 and the mean accepted steps per orbit (50 orbits; for DROMO the sigma pass, with the steps of the
 final-time search in their own column), beside heyoka's double-precision rows stored in the same
@@ -24,7 +24,8 @@ sys.path.insert(0, str(ROOT))
 from tetherlab.benchmarks.stiefel import N_ORBITS, REFERENCE, reference_position_m, runner  # noqa: E402
 
 TOLS = tuple(10.0**-k for k in range(4, 14))
-CASES = (("cowell", "dop853"), ("cowell", "radau5"), ("dromo", "dop853"), ("dromo", "radau5"))
+CASES = (("cowell", "dop853"), ("cowell", "vern9"), ("cowell", "radau5"), ("dromo", "dop853"),
+         ("dromo", "vern9"), ("dromo", "radau5"))
 
 
 def rows() -> list[dict]:

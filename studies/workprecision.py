@@ -287,7 +287,8 @@ def stiefel_cases():
 
     truth = stiefel_truth()
     base = load_scene(HERE / "scenes" / "stiefel-scheifele.toml").replace(**{"output.count": 2})
-    native = {"dop853": TOLERANCES, "radau5": TOLERANCES}
+    # Vern9 only here: its gain is at tight tolerances on smooth orbits (docs/integrators.md)
+    native = {"dop853": TOLERANCES, "vern9": TOLERANCES, "radau5": TOLERANCES}
     return [
         Case("Stiefel cowell", base.replace(**{"integrator.formulation": "cowell"}), truth,
              {**native, "scipy:DOP853": [1e-6, 1e-8, 1e-10]}),

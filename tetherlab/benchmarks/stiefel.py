@@ -1,7 +1,7 @@
 """Stiefel-Scheifele speed benchmark: tetherlab's best method against heyoka at equal final error.
 
 For each target final-position error (1 m and 1 mm; issue 3, "Speed"), every tetherlab candidate
-(Cowell and DROMO with DOP853) and heyoka (taylor_adaptive, double precision) is run over a grid
+(Cowell and DROMO, each with DOP853 and Vern9) and heyoka (taylor_adaptive, double precision) is run over a grid
 of tolerances; for each the loosest tolerance that reaches the target is timed (median of
 ``repeats`` runs), and the fastest tetherlab candidate is compared with heyoka: ratio =
 tetherlab wall time / heyoka wall time (< 1: tetherlab is faster).
@@ -36,7 +36,7 @@ TARGETS_M = (1.0, 1e-3)
 TOLS = tuple(10.0 ** (-k / 2) for k in range(16, 31))
 #: heyoka double: its tolerance may go down to the double epsilon
 HEYOKA_TOLS = tuple(10.0 ** (-k / 2) for k in range(16, 32)) + (2.220446049250313e-16,)
-CANDIDATES = (("dromo", "dop853"), ("cowell", "dop853"))
+CANDIDATES = (("dromo", "dop853"), ("dromo", "vern9"), ("cowell", "dop853"), ("cowell", "vern9"))
 
 
 def reference_position_m() -> np.ndarray:
