@@ -26,7 +26,7 @@ DAY_S = 86400.0
 #: docs/effects-electrodynamic.md (section 6); explicit ones at the same value for comparison.
 #: The scipy backends cannot locate the [stop] event (tetherlab's kernels do), and take minutes
 #: here (scipy:Radau 101 s measured with day-by-day chunks): they are left out of the table.
-DEFAULT_METHODS = {"radau5": 1e-8, "dop853": 1e-8}
+DEFAULT_METHODS = {"radau5": 1e-8, "dop853": 1e-8, "vern9": 1e-8}
 
 
 @dataclass
