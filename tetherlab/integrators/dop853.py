@@ -135,25 +135,36 @@ def hinit(rhs, t, y, f0, p, rtol, atol, iord, h_cap, y1, f1, stats):
     return min(100.0 * h, h1, h_cap)
 
 
-@njit(cache=True)
-def _dop_stages(rhs, t, y, h, p, K, ys, stats):
-    """Stages 1..11 into K[1..11] (K[0] = f(t, y) on entry).  Returns the first nonzero rhs
-    status, or 0."""
+@njit(cache=True, inline="always")
+def rk_stages(A, C, lo, hi, rhs, t, y, h, p, K, ys, check_finite, stats):
+    """Explicit stages lo..hi-1 of the tableau (A, C) into K[lo..hi-1] (K[0..lo-1] known).
+    Returns the first nonzero rhs status, -1 if ``check_finite`` and a stage came out
+    non-finite, or 0.  (Shared by DOP853 and Vern9; the step's own stages are checked through
+    y_new and the error norm instead.)"""
     n = y.shape[0]
-    for s in range(1, 12):
+    for s in range(lo, hi):
         for i in range(n):
             ys[i] = y[i]
         # j-outer loop: skips the many zero entries of A and runs contiguously over K[j].
         for j in range(s):
-            a = _A[s, j] * h
+            a = A[s, j] * h
             if a != 0.0:
                 for i in range(n):
                     ys[i] += a * K[j, i]
-        st = rhs(t + _C[s] * h, ptr(ys), row_ptr(K, s), ptr(p))
+        st = rhs(t + C[s] * h, ptr(ys), row_ptr(K, s), ptr(p))
         stats[ST_NRHS] += 1
         if st != 0:
             return st
+        if check_finite and not all_finite(K[s]):
+            return -1
     return 0
+
+
+@njit(cache=True)
+def _dop_stages(rhs, t, y, h, p, K, ys, stats):
+    """Stages 1..11 into K[1..11] (K[0] = f(t, y) on entry).  Returns the first nonzero rhs
+    status, or 0."""
+    return rk_stages(_A, _C, 1, 12, rhs, t, y, h, p, K, ys, False, stats)
 
 
 @njit(cache=True)
@@ -208,22 +219,7 @@ def _dop_error(y, y_new, K, h, rtol, atol):
 @njit(cache=True)
 def _dop_dense_stages(rhs, t, y, h, p, K, ys, stats):
     """The three extra stages K[13..15] of the 7th-order interpolant (K[12] = f(t+h, y_new))."""
-    n = y.shape[0]
-    for s in range(13, 16):
-        for i in range(n):
-            ys[i] = y[i]
-        for j in range(s):
-            a = _A[s, j] * h
-            if a != 0.0:
-                for i in range(n):
-                    ys[i] += a * K[j, i]
-        st = rhs(t + _C[s] * h, ptr(ys), row_ptr(K, s), ptr(p))
-        stats[ST_NRHS] += 1
-        if st != 0:
-            return st
-        if not all_finite(K[s]):
-            return -1  # caller maps -1 to "non-finite"
-    return 0
+    return rk_stages(_A, _C, 13, 16, rhs, t, y, h, p, K, ys, True, stats)
 
 
 @njit(cache=True)

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from tetherlab._jit import njit, ptr, row_ptr
 
-from .dop853 import ST_NRHS, all_finite, scaled_sq
+from .dop853 import ST_NRHS, all_finite, rk_stages, scaled_sq
 from .tableau import V9_A, V9_B, V9_C, V9_E, V9_N_ALL, V9_N_DENSE, V9_N_STAGES, V9_P
 
 _A = V9_A
@@ -51,25 +51,9 @@ SAFETY = 0.8
 
 @njit(cache=True)
 def v9_stages(rhs, t, y, h, p, K, ys, lo, hi, stats):
-    """Stages lo..hi-1 into K[lo..hi-1] (K[0..lo-1] known).  Returns the first nonzero rhs
-    status, -1 if a stage came out non-finite (checked for the interpolant's stages only,
-    lo > NS; the step's own stages are checked through y_new and the error norm), or 0."""
-    n = y.shape[0]
-    for s in range(lo, hi):
-        for i in range(n):
-            ys[i] = y[i]
-        for j in range(s):
-            a = _A[s, j] * h
-            if a != 0.0:
-                for i in range(n):
-                    ys[i] += a * K[j, i]
-        st = rhs(t + _C[s] * h, ptr(ys), row_ptr(K, s), ptr(p))
-        stats[ST_NRHS] += 1
-        if st != 0:
-            return st
-        if lo > NS and not all_finite(K[s]):
-            return -1
-    return 0
+    """Stages lo..hi-1 into K[lo..hi-1] (K[0..lo-1] known); the interpolant's stages (lo > NS)
+    are checked for non-finite values (-1).  See :func:`.dop853.rk_stages`."""
+    return rk_stages(_A, _C, lo, hi, rhs, t, y, h, p, K, ys, lo > NS, stats)
 
 
 @njit(cache=True)
