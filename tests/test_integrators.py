@@ -246,7 +246,8 @@ def test_explicit_kepler_error_in_tolerance_units(method, rtol):
     # Measured 2.9, 7.6, 25.6 units; scipy's DOP853 gives the same numbers (and both reach ~70 at
     # rtol 1e-12: DOP853's tolerance proportionality is not perfect), so 50 is a bound with
     # margin that a broken controller, error norm or tableau (errors >> 100 units) exceeds.
-    # Vern9 (error estimate of its order-8 embedded solution, safety 0.8) sits lower still.
+    # Vern9 (the error of its order-8 embedded solution controls an order-9 one, safety 0.8)
+    # measured 0.19, 1.05, 0.73 units.
     t_out = np.linspace(0.0, PERIOD, 9)
     (status, _, _, _), _, y_out, stats = run_kernel(KERNELS[method], kepler, 0.0, Y0_KEPLER, t_out,
                                                     rtol, rtol)  # fmt: skip

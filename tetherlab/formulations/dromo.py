@@ -49,9 +49,8 @@ from ..integrators.dop853 import NON_FINITE as NON_FINITE_STATUS
 from ..integrators.dop853 import OK as OK_STATUS
 from ..integrators.dop853 import RHS_FAILED as RHS_FAILED_STATUS
 from ..integrators.dop853 import ST_ACCEPTED, ST_RHS_STATUS
-from ..integrators.erk import DOP853 as ERK_DOP853
 from ..integrators.erk import K_ROWS as ERK_K_ROWS
-from ..integrators.erk import VERN9 as ERK_VERN9
+from ..integrators.erk import KINDS as ERK_KINDS
 from ..integrators.erk import erk_core, erk_step
 from ..tether.chain import accelerations
 
@@ -246,7 +245,8 @@ def _clock_run(kind, rhs, event, sig, z, h, targets, k, p, rtol, atol, sig_max, 
     crossing step and the located sigma in ev[0].  One step of the same method from there to
     ev[0] gives output k; the target moves on and the integration restarts from the same step
     start (redoing that step), so outputs do not move the path (a restart only forgets the
-    controller's last rejection, which caps the next step).  Returns (status, sig, h, k, sig_max); status MAX_STEPS after ``max_steps`` accepted steps (the caller continues).
+    controller's last rejection, which caps the next step).  Returns (status, sig, h, k,
+    sig_max); status MAX_STEPS after ``max_steps`` accepted steps (the caller continues).
     """
     n = z.shape[0]
     off = int(p[H_OFF_FORM])
@@ -507,7 +507,7 @@ def integrate_sigma(method, p_ext, r0_m, v0_m_s, t_out, rtol, atol, mu, length_m
     tt = np.asarray(t_out, float)
     if tt.ndim != 1 or tt.size == 0 or np.any(np.diff(tt) < 0) or tt[0] < 0:
         raise ValueError(f"t_out: expected non-decreasing times >= 0 s; got {tt!r}")
-    if method in ("dop853", "vern9"):
+    if method in ERK_KINDS:
         return _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m,
                                       sigma0, max_steps, progress)  # fmt: skip
     return _integrate_sigma_grid(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0,
@@ -546,14 +546,15 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
     out_z = np.empty((m, 8))
     stats = np.zeros(8, dtype=np.int64)
     compile_s = warm_up(method, dromo_sigma_rhs, 8, p_ext)
-    kind = ERK_VERN9 if method == "vern9" else ERK_DOP853
+    kind = ERK_KINDS[method]
     t0 = time.perf_counter()
     sig, h, k, budget, status = float(sigma0), 0.0, 0, int(max_steps), OK_STATUS
     while k < m:
         acc = int(stats[ST_ACCEPTED])
-        status, sig, h, k, sig_max = _clock_run(kind, dromo_sigma_rhs, dromo_clock_event, sig, z, h, targets,
-                                                k, p_ext, float(rtol), atol_v, sig_max,
-                                                min(CLOCK_CHUNK_STEPS, budget), out_sig, out_z, stats)  # fmt: skip
+        status, sig, h, k, sig_max = _clock_run(kind, dromo_sigma_rhs, dromo_clock_event, sig, z, h,
+                                                targets, k, p_ext, float(rtol), atol_v, sig_max,
+                                                min(CLOCK_CHUNK_STEPS, budget), out_sig, out_z,
+                                                stats)  # fmt: skip
         budget -= int(stats[ST_ACCEPTED]) - acc
         if progress is not None:
             progress(float(z[0] * T))

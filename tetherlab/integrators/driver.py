@@ -37,7 +37,7 @@ from .dop853 import (
     ST_RHS_STATUS,
     STEP_UNDERFLOW,
 )
-from .erk import DOP853, VERN9, erk_core
+from .erk import KINDS, erk_core
 from .radau5 import radau5_core, radau5_workspace
 
 NATIVE_METHODS = ("dop853", "vern9", "radau5")
@@ -196,10 +196,9 @@ def _call_kernel(method, rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y
                  fixed_step, ws, resume, event=None, ne=0, ev=None):  # fmt: skip
     if event is None:
         event, ne, ev = rhs, 0, _NO_EV  # same ABI; never called with ne = 0
-    if method in ("dop853", "vern9"):
-        kind = VERN9 if method == "vern9" else DOP853
-        return erk_core(kind, rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
-                        fixed_step, event, ne, ev)  # fmt: skip
+    if method in KINDS:
+        return erk_core(KINDS[method], rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out,
+                        stats, fixed_step, event, ne, ev)  # fmt: skip
     return radau5_core(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats,
                        fixed_step, *ws, resume, event, ne, ev)  # fmt: skip
 

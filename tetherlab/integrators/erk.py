@@ -51,6 +51,8 @@ from .dop853 import (
 
 DOP853 = 0
 VERN9 = 1
+#: method name -> kind, for the callers that choose by name (the driver, DROMO's output clock)
+KINDS = {"dop853": DOP853, "vern9": VERN9}
 #: rows of a stage workspace K that serves either kind (erk_step callers)
 K_ROWS = max(16, _v9.NK)
 
