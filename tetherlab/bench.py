@@ -23,7 +23,7 @@ import numpy as np
 from ._jit import njit, ptr
 
 ROOT = Path(__file__).resolve().parent.parent
-METHODS = ("dop853", "radau5", "scipy:DOP853")
+METHODS = ("dop853", "vern9", "radau5", "scipy:DOP853")
 BENCH_SCENE = ROOT / "studies" / "scenes" / "bench-libration.toml"
 
 
@@ -162,7 +162,7 @@ def main(argv=None) -> int:
         _print_table("bench-libration.toml, 10 orbits (target: >= 30x faster than scipy on the same rhs)", srows)
         by = {r["method"]: r for r in srows}
         if "scipy:DOP853" in by:
-            for m in ("dop853", "radau5"):
+            for m in ("dop853", "vern9", "radau5"):
                 if m in by:
                     print(f"speed-up {m} vs scipy:DOP853: {by['scipy:DOP853']['wall_s'] / by[m]['wall_s']:.1f}x")
     if want("effects"):
