@@ -143,6 +143,8 @@ def _print_table(title, rows):
 EXTRA_SECTIONS = (
     ("stiefel", "Stiefel-Scheifele: tetherlab's best method against heyoka at 1 m and 1 mm final error (issue 3)"),
     ("deorbit", "Electrodynamic de-orbit, n = 1, whole mission, every integrator (issue 3)"),
+    ("cost_vs_n", "Cost per simulated orbit against the rod count, bench-libration rtol 1e-8, "
+                  "damped and undamped; last rows: fitted exponents (issue 11)"),
 )
 
 
