@@ -43,12 +43,12 @@ from ..kernel.layout import (
     H_OFF_FORM,
     H_ROOT_M,
 )
-from ..integrators.dop853 import EVENT as EVENT_STATUS
-from ..integrators.dop853 import MAX_STEPS as MAX_STEPS_STATUS
-from ..integrators.dop853 import NON_FINITE as NON_FINITE_STATUS
-from ..integrators.dop853 import OK as OK_STATUS
-from ..integrators.dop853 import RHS_FAILED as RHS_FAILED_STATUS
-from ..integrators.dop853 import ST_ACCEPTED, ST_RHS_STATUS
+from ..integrators.common import EVENT as EVENT_STATUS
+from ..integrators.common import MAX_STEPS as MAX_STEPS_STATUS
+from ..integrators.common import NON_FINITE as NON_FINITE_STATUS
+from ..integrators.common import OK as OK_STATUS
+from ..integrators.common import RHS_FAILED as RHS_FAILED_STATUS
+from ..integrators.common import ST_ACCEPTED, ST_RHS_STATUS
 from ..integrators.erk import K_ROWS as ERK_K_ROWS
 from ..integrators.erk import KINDS as ERK_KINDS
 from ..integrators.erk import erk_core, erk_step
@@ -531,8 +531,9 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
     """
     import time
 
-    from ..integrators.dop853 import ST_ACCEPTED, ST_NJAC, ST_NLU, ST_NRHS, ST_REJECTED
-    from ..integrators.driver import IntegrationResult, status_message, warm_up
+    from ..integrators.common import ST_ACCEPTED, ST_NJAC, ST_NLU, ST_NRHS, ST_REJECTED
+    from ..integrators.common import IntegrationResult, status_message
+    from ..integrators.driver import warm_up
 
     L, T = units(mu, length_m)
     el0 = cartesian_to_dromo(r0_m, v0_m_s, mu, length_m, sigma0)

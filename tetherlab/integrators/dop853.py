@@ -10,8 +10,9 @@ output CONTD8); the step loop, shared with Vern9, is :func:`tetherlab.integrator
 the loop, the calls of the right-hand side (a cfunc with :data:`tetherlab._jit.RHS_SIG`) and the
 dense output are one compiled function, so no Python runs between steps.
 
-It also holds the small helpers shared by every kernel (status codes, HINIT, output at the start
-time, event bookkeeping), so all kernels behave the same at their boundaries.
+The helpers shared by every kernel (status codes, statistics slots, HINIT, output at the start
+time, event bookkeeping) live in :mod:`.common`; the names below are re-exported from there for
+one release so code that imported them from here keeps working (import them from ``common``).
 """
 
 from __future__ import annotations
@@ -20,38 +21,35 @@ import numpy as np
 
 from tetherlab._jit import njit, ptr, row_ptr
 
+from .common import (  # noqa: F401  (re-exported for one release; import from .common)
+    EPS,
+    EVENT,
+    H_FLOOR,
+    MAX_BAD_TRIALS,
+    MAX_CONSECUTIVE_REJECTS,
+    MAX_STEPS,
+    NON_FINITE,
+    OK,
+    RHS_FAILED,
+    ST_ACCEPTED,
+    ST_NEWTON_FAIL,
+    ST_NJAC,
+    ST_NLU,
+    ST_NRHS,
+    ST_REJECTED,
+    ST_RHS_STATUS,
+    STEP_UNDERFLOW,
+    UNDERFLOW_FACTOR,
+    all_finite,
+    apply_forced_side,
+    event_time_tolerance,
+    fill_start_outputs,
+    first_crossing,
+    hinit,
+    scaled_sq,
+    start_events,
+)
 from .tableau import DOP_A, DOP_B, DOP_C, DOP_D, DOP_E3, DOP_E5
-
-# Return codes of every kernel (see tetherlab.integrators.driver for their messages).
-OK = 0
-MAX_STEPS = 1
-STEP_UNDERFLOW = 2
-RHS_FAILED = 3
-NON_FINITE = 4
-EVENT = 5  # an event function changed sign in the step; see erk_core / radau5_core
-
-# stats[] slots (int64[8], accumulated across calls).
-ST_ACCEPTED = 0
-ST_REJECTED = 1
-ST_NRHS = 2
-ST_NJAC = 3
-ST_NLU = 4
-ST_RHS_STATUS = 5
-ST_NEWTON_FAIL = 6
-
-EPS = float(np.finfo(np.float64).eps)
-#: Consecutive failed trials caused by the rhs (nonzero status or non-finite values) after which
-#: a kernel gives up.  Each failure divides h by 4, so 20 of them shrink it by 4**20 ~ 1e12: if
-#: that has not moved the trial stages off the bad region, the step is not the problem.
-MAX_BAD_TRIALS = 20
-#: Consecutive rejections of any kind after which a kernel reports STEP_UNDERFLOW.  Rejections
-#: for error or Newton convergence normally come in ones and twos; a hundred in a row means the
-#: controller is not converging (and guards the case t = 0, where 16*eps*|t| never triggers).
-MAX_CONSECUTIVE_REJECTS = 100
-#: Step-size floor relative to |t|, below which t + h == t is near and the step is meaningless.
-UNDERFLOW_FACTOR = 16.0 * EPS
-#: Absolute floor (for t = 0): smaller steps are denormal-range nonsense for any model.
-H_FLOOR = 1e-300
 
 # Module-level copies as plain float64 arrays: numba freezes global arrays into the compiled code.
 _A = DOP_A
@@ -60,79 +58,6 @@ _C = DOP_C
 _D = DOP_D
 _E3 = DOP_E3
 _E5 = DOP_E5
-
-
-@njit(cache=True)
-def fill_start_outputs(t, y, t_out, y_out):
-    """Rows for output times <= t (i.e. == t, after validation) get y; returns how many."""
-    k = 0
-    m = t_out.shape[0]
-    while k < m and t_out[k] <= t:
-        y_out[k, :] = y
-        k += 1
-    return k
-
-
-@njit(cache=True)
-def all_finite(v):
-    for i in range(v.shape[0]):
-        if not np.isfinite(v[i]):
-            return False
-    return True
-
-
-@njit(cache=True)
-def scaled_sq(v, sk):
-    """(v/sk)^2 with the convention 0/0 -> 0: atol_i = 0 is allowed, and a component that is
-    exactly zero (a planar problem's z) must not poison the norm with NaN."""
-    if sk > 0.0:
-        r = v / sk
-        return r * r
-    if v == 0.0:
-        return 0.0
-    return np.inf
-
-
-@njit(cache=True)
-def hinit(rhs, t, y, f0, p, rtol, atol, iord, h_cap, y1, f1, stats):
-    """Initial step, Hairer's HINIT (DOP853 source; also "Solving ODEs I", II.4).
-
-    Uses one extra rhs evaluation (an explicit Euler step) to estimate the second derivative.
-    Norms are Hairer's: unnormalised sums with sk = atol + rtol*|y|.  If the probing evaluation
-    fails, the first estimate is returned and the step loop's failure handling shrinks it.
-    """
-    n = y.shape[0]
-    dnf = 0.0
-    dny = 0.0
-    for i in range(n):
-        sk = atol[i] + rtol * abs(y[i])
-        dnf += scaled_sq(f0[i], sk)
-        dny += scaled_sq(y[i], sk)
-    if dnf <= 1e-10 or dny <= 1e-10 or not np.isfinite(dnf) or not np.isfinite(dny):
-        h = 1e-6
-    else:
-        h = np.sqrt(dny / dnf) * 0.01
-    h = min(h, h_cap)
-    for i in range(n):
-        y1[i] = y[i] + h * f0[i]
-    st = rhs(t + h, ptr(y1), ptr(f1), ptr(p))
-    stats[ST_NRHS] += 1
-    if st != 0:
-        stats[ST_RHS_STATUS] = st
-        return h
-    der2 = 0.0
-    for i in range(n):
-        sk = atol[i] + rtol * abs(y[i])
-        der2 += scaled_sq(f1[i] - f0[i], sk)
-    if not np.isfinite(der2):
-        return h
-    der2 = np.sqrt(der2) / h
-    der12 = max(abs(der2), np.sqrt(dnf))
-    if der12 <= 1e-15:
-        h1 = max(1e-6, h * 1e-3)
-    else:
-        h1 = (0.01 / der12) ** (1.0 / iord)
-    return min(100.0 * h, h1, h_cap)
 
 
 @njit(cache=True, inline="always")
@@ -252,51 +177,3 @@ def _dop_dense_eval(y, F, x, out):
         v = (v + F[1, i]) * x1
         v = (v + F[0, i]) * x
         out[i] = y[i] + v
-
-
-@njit(cache=True)
-def first_crossing(gold, gnew, ne):
-    """True if any event component changed side: "side" is g < 0 versus g >= 0, so a restart
-    exactly at a root (g = 0) counts as already on the non-negative side."""
-    for i in range(ne):
-        if (gold[i] < 0.0) != (gnew[i] < 0.0):
-            return True
-    return False
-
-
-@njit(cache=True)
-def start_events(event, t, y, p, ne, ev, stats):
-    """Event buffers (g at the start, at the step end, scratch) and g(t, y) with the forced
-    side of a just-located event applied; returns (status, gold, gnew, gtmp), status 0 or the
-    event function's nonzero status (also stored in stats)."""
-    gold = np.zeros(max(ne, 1))
-    gnew = np.zeros(max(ne, 1))
-    gtmp = np.zeros(max(ne, 1))
-    st = 0
-    if ne > 0:
-        st = event(t, ptr(y), ptr(gold), ptr(p))
-        if st != 0:
-            stats[ST_RHS_STATUS] = st
-        else:
-            apply_forced_side(gold, ne, ev)
-    return st, gold, gnew, gtmp
-
-
-@njit(cache=True)
-def apply_forced_side(gold, ne, ev):
-    """Right after a located event the state sits within the bracket width of the root and may
-    still evaluate on the old side; ev[2] >= 0 names that component and ev[3] its new-side value,
-    used once for the start of the restarted integration (then cleared), so the same crossing is
-    not found twice."""
-    fc = int(ev[2])
-    if fc >= 0 and fc < ne:
-        gold[fc] = ev[3]
-    ev[2] = -1.0
-
-
-def event_time_tolerance(t, h):
-    """Width of the bracket to which an event time is located (s): a few ulps of t, or of h."""
-    return 64.0 * EPS * max(abs(t), abs(h))
-
-
-event_time_tolerance = njit(cache=True)(event_time_tolerance)

@@ -15,14 +15,13 @@ from __future__ import annotations
 import math
 import numbers
 import time
-from dataclasses import dataclass, field
-
 import numpy as np
 from numba.core.ccallback import CFunc
 
 from tetherlab._jit import RHS_SIG
 
-from .dop853 import (
+from .common import (
+    IntegrationResult,
     EVENT,
     MAX_STEPS,
     NON_FINITE,
@@ -36,6 +35,7 @@ from .dop853 import (
     ST_REJECTED,
     ST_RHS_STATUS,
     STEP_UNDERFLOW,
+    status_message,
 )
 from .erk import KINDS, erk_core
 from .radau5 import radau5_core, radau5_workspace
@@ -50,33 +50,6 @@ _FIRST_CHUNK_STEPS = 64
 #: A chunk grows by at most this factor per call, so one unrepresentative fast chunk (e.g. a
 #: quiet stretch of the trajectory) cannot schedule a chunk of many minutes.
 _MAX_CHUNK_GROWTH = 8
-
-
-@dataclass(frozen=True)
-class IntegrationResult:
-    """Outcome of :func:`integrate`.
-
-    ``t`` are the output times actually reached and ``y[k]`` the state at ``t[k]``; on failure
-    they hold every output computed before it.  ``status`` is 0 on success, else the kernel code
-    (1 max_steps, 2 step underflow / no convergence, 3 rhs failure, 4 non-finite values) and
-    ``message`` says what happened and when.  ``t_end``/``y_end`` is the last accepted state.
-    """
-
-    t: np.ndarray
-    y: np.ndarray
-    status: int
-    message: str
-    t_end: float
-    y_end: np.ndarray
-    stats: dict = field(default_factory=dict)
-    #: Located events, in time order: (t, component index, new side +1 (g >= 0) or -1 (g < 0)).
-    events: tuple = ()
-    #: Component of the terminal event that stopped the run (None if it ran to the end).
-    stopped_by: int | None = None
-
-    @property
-    def success(self) -> bool:
-        return self.status == OK
 
 
 # ----------------------------------------------------------------------------------------------
@@ -247,23 +220,6 @@ def warm_up(method, rhs, n, p):
 # ----------------------------------------------------------------------------------------------
 # integrate
 # ----------------------------------------------------------------------------------------------
-def status_message(status, t_end, h, rhs_status, n_newton_fail, max_steps):
-    """Human-readable outcome of a run (shared with the scipy backend)."""
-    if status == OK:
-        return f"reached t={t_end!r}"
-    if status == MAX_STEPS:
-        return f"stopped after max_steps={max_steps} steps at t={t_end!r} (h={h:.3e})"
-    if status == RHS_FAILED:
-        return (f"the right-hand side returned status {rhs_status} at a trial state just after "
-                f"t={t_end!r}, and reducing the step size did not help")  # fmt: skip
-    if status == NON_FINITE:
-        return (f"non-finite values (NaN or Inf) in the solution just after t={t_end!r} that "
-                f"reducing the step size did not remove")  # fmt: skip
-    if status == STEP_UNDERFLOW:
-        extra = f" ({n_newton_fail} Newton failures)" if n_newton_fail else ""
-        return (f"step size underflow or no convergence at t={t_end!r} (h={h:.3e}){extra}: "
-                f"the problem may be singular there or too stiff for the method")  # fmt: skip
-    return f"unknown status {status} at t={t_end!r}"
 
 
 def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_steps=10**7,

@@ -19,7 +19,7 @@ import numpy as np
 from tetherlab._jit import njit, ptr, row_ptr
 
 from . import vern9 as _v9
-from .dop853 import (
+from .common import (
     EVENT,
     H_FLOOR,
     MAX_BAD_TRIALS,
@@ -34,19 +34,21 @@ from .dop853 import (
     ST_RHS_STATUS,
     STEP_UNDERFLOW,
     UNDERFLOW_FACTOR,
+    all_finite,
+    event_time_tolerance,
+    fill_start_outputs,
+    first_crossing,
+    hinit,
+    start_events,
+)
+from .dop853 import (
     _dop_combine,
     _dop_dense_coeffs,
     _dop_dense_eval,
     _dop_dense_stages,
     _dop_error,
     _dop_stages,
-    all_finite,
     dop853_step,
-    event_time_tolerance,
-    fill_start_outputs,
-    first_crossing,
-    hinit,
-    start_events,
 )
 
 DOP853 = 0

@@ -32,7 +32,7 @@ import numpy as np
 
 from tetherlab._jit import njit, ptr, row_ptr
 
-from .dop853 import (
+from .common import (
     EPS,
     EVENT,
     H_FLOOR,

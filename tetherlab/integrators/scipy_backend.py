@@ -17,8 +17,15 @@ import time
 import numpy as np
 from scipy import integrate as _si
 
-from .dop853 import MAX_STEPS, NON_FINITE, OK, RHS_FAILED, STEP_UNDERFLOW
-from .driver import IntegrationResult, status_message
+from .common import (
+    MAX_STEPS,
+    NON_FINITE,
+    OK,
+    RHS_FAILED,
+    STEP_UNDERFLOW,
+    IntegrationResult,
+    status_message,
+)
 
 SOLVERS = {
     "DOP853": _si.DOP853,

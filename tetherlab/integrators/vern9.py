@@ -34,7 +34,8 @@ from __future__ import annotations
 
 from tetherlab._jit import njit, ptr, row_ptr
 
-from .dop853 import ST_NRHS, all_finite, rk_stages, scaled_sq
+from .common import ST_NRHS, all_finite, scaled_sq
+from .dop853 import rk_stages
 from .tableau import V9_A, V9_B, V9_C, V9_E, V9_N_ALL, V9_N_DENSE, V9_N_STAGES, V9_P
 
 _A = V9_A
