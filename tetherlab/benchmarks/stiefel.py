@@ -48,6 +48,7 @@ def reference_position_m() -> np.ndarray:
 def runner(formulation: str, method: str, tol: float):
     """A zero-argument function running the scene to t_f once: returns (r_final_m, stats)."""
     from ..formulations import dromo
+    from ..propagation import dromo as drive
     from ..formulations.cowell import cowell_rhs
     from ..integrators.driver import integrate
     from ..kernel.layout import FORM_DROMO_SIGMA
@@ -56,8 +57,11 @@ def runner(formulation: str, method: str, tol: float):
 
     if formulation not in ("cowell", "dromo"):
         raise ValueError(f"formulation: expected 'cowell' or 'dromo'; got {formulation!r}")
+    # "abm" (DROMO sigma form only) is not a scene method: the scene is prepared with vern9 (its
+    # starter) and the method is named to the DROMO driver directly
     scene = load_scene(SCENE).replace(**{
-        "integrator.method": method, "integrator.rtol": tol, "integrator.atol": tol,
+        "integrator.method": "vern9" if method == "abm" else method, "integrator.rtol": tol,
+        "integrator.atol": tol,
         "integrator.formulation": formulation, "output.count": 2,
     })  # fmt: skip
     prep = prepare(scene)
@@ -74,7 +78,7 @@ def runner(formulation: str, method: str, tol: float):
         p0 = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
 
         def run():
-            res = dromo.integrate_sigma(method, p0.copy(), prep.y0[:3], prep.y0[h : h + 3], prep.t_out,
+            res = drive.integrate_sigma(method, p0.copy(), prep.y0[:3], prep.y0[h : h + 3], prep.t_out,
                                         tol, tol, mu, L, max_steps=prep.max_steps)  # fmt: skip
             ok = res.status == 0 and len(res.t) == len(prep.t_out)
             return res.y[-1, :3] if ok else np.full(3, np.nan), dict(res.stats)

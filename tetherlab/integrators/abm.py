@@ -44,7 +44,7 @@ import numpy as np
 
 from tetherlab._jit import njit, ptr, row_ptr
 
-from .dop853 import (
+from .common import (
     NON_FINITE,
     OK,
     RHS_FAILED,
