@@ -101,9 +101,9 @@ def test_starting_values_are_far_more_accurate_than_a_step():
     y = np.array([1.0, 0.0, 0.0])
     ws = abm.workspace(3)
     stats = np.zeros(8, np.int64)
-    st = abm.abm_start(_oscillator, 0.0, y, h, k, ws["F"], np.zeros(4), ws["K"], ws["w"],
-                       abm.START_SUBSTEPS, stats)  # fmt: skip
-    assert st == abm.OK
+    st, j = abm.abm_start(_oscillator, 0.0, y, h, k, ws["F"], np.zeros(4), ws["K"], ws["w"],
+                          abm.START_SUBSTEPS, stats, -1, 0.0, np.zeros(2))  # fmt: skip
+    assert st == abm.OK and j == k - 1
     t = (k - 1) * h
     assert abs(y[0] - math.cos(t)) < 1e-14 and abs(y[1] + math.sin(t)) < 1e-14
     for j in range(k):  # the history: f(t_j, y_j) = (-sin t_j, -cos t_j, 1)
@@ -136,3 +136,14 @@ def test_level_stop_and_resume_are_bit_for_bit():
     st3, t3, _, _, y3, *_ = _run(k, h, 6.0)
     assert st2 == st3 == abm.OK and t2 == t3
     assert np.array_equal(y2, y3)
+
+
+def test_level_crossed_inside_the_starting_procedure():
+    """The stop is at the start of the starting interval that crosses the level (no history:
+    head -1), so an output between restarts is never stepped over."""
+    k, h = 9, 0.1
+    st, t, _, head, y, F, stats, fix = _run(k, h, 6.0, comp=2, level=0.35)
+    assert st == abm.LEVEL and head == -1
+    assert t == pytest.approx(0.3, abs=1e-15) and y[2] == pytest.approx(0.3, abs=1e-15)
+    assert fix[0] == pytest.approx(0.4, abs=1e-15) and fix[1] == 1.0
+    assert abs(y[0] - math.cos(0.3)) < 1e-14  # the starting values are the Vern9 ones

@@ -48,6 +48,7 @@ from .common import (
     NON_FINITE,
     OK,
     RHS_FAILED,
+    MAX_BAD_TRIALS,
     STEP_UNDERFLOW,
     ST_ACCEPTED,
     ST_NRHS,
@@ -136,36 +137,49 @@ def workspace(n: int) -> dict:
 
 
 @njit(cache=True)
-def abm_start(rhs, t, y, h, k, F, p, K, w, nsub, stats):
+def abm_start(rhs, t, y, h, k, F, p, K, w, nsub, stats, comp, level, fix):
     """Starting procedure: from (t, y), k - 1 Vern9 intervals of length h (``nsub`` substeps
     each) give y_1..y_{k-1}; F[j] = f(t + j h, y_j), j = 0..k-1 (the history slots in time
-    order, so the ring head is k - 1).  On return y holds y_{k-1}.  Returns a status (0 ok)."""
+    order, so the ring head is k - 1).  On return y holds y_{k-1}.
+
+    With ``comp >= 0`` (else -1): if y[comp] reaches ``level`` in interval j, y is left at that interval's
+    start y_{j-1}, fix = (y_j[comp], f_j[comp]), and the status is LEVEL.  Returns (status,
+    number of completed intervals)."""
     n = y.shape[0]
     ys = w[0]
     ynew = w[1]
+    y0 = w[2]
     st = rhs(t, ptr(y), row_ptr(F, 0), ptr(p))
     stats[ST_NRHS] += 1
     if st != 0:
         stats[ST_RHS_STATUS] = st
-        return RHS_FAILED
+        return RHS_FAILED, 0
     hs = h / nsub
     for j in range(1, k):
         t0 = t + (j - 1) * h
+        for i in range(n):
+            y0[i] = y[i]
         for s in range(nsub):
             st = erk_step(VERN9, rhs, t0 + s * hs, y, hs, p, K, ys, ynew, stats)
             if st != 0:
                 if st > 0:
                     stats[ST_RHS_STATUS] = st
-                    return RHS_FAILED
-                return NON_FINITE
+                    return RHS_FAILED, j - 1
+                return NON_FINITE, j - 1
             for i in range(n):
                 y[i] = ynew[i]
         st = rhs(t + j * h, ptr(y), row_ptr(F, j), ptr(p))
         stats[ST_NRHS] += 1
         if st != 0:
             stats[ST_RHS_STATUS] = st
-            return RHS_FAILED
-    return OK
+            return RHS_FAILED, j - 1
+        if comp >= 0 and y[comp] >= level:
+            fix[0] = y[comp]
+            fix[1] = F[j, comp]
+            for i in range(n):
+                y[i] = y0[i]
+            return LEVEL, j - 1
+    return OK, k - 1
 
 
 @njit(cache=True)
@@ -216,13 +230,16 @@ def abm_core(rhs, t, y, h, k, F, head, p, rtol, atol, t_stop, comp, level, windo
              adapt, stats, K, w, fix):  # fmt: skip
     """Constant-step ABM PECE of order k from (t, y) with history F (ring head ``head``).
 
-    ``head < 0``: no history yet; the starting procedure runs first.  Stops (state at the start
-    of the step, history kept, so a later call resumes bit-for-bit):
+    ``head < 0``: no history yet; the starting procedure runs first (if the level is crossed
+    inside it, the stop is at the start of that starting interval, with head -1: the next call
+    starts afresh from there).  Stops (state at the start of the step, history kept, so a later
+    call resumes bit-for-bit):
     * status LEVEL when a step would take y[comp] to >= ``level`` (comp >= 0): y, t are the step's
       start, ``fix[0]`` = y[comp] after the step, fix[1] its derivative (for locating the level);
     * status OK when the next step would pass t_stop (the caller lands on it);
     * status 1 (MAX_STEPS) after ``max_steps`` accepted steps.
-    With ``adapt`` the step changes as in the module docstring (restarts); without, h is fixed.
+    With ``adapt`` the step changes as in the module docstring (restarts; a non-finite step is a
+    rejection with h/4, up to MAX_BAD_TRIALS in a row); without, h is fixed.
     Returns (status, t, h, head)."""
     n = y.shape[0]
     ab = AB_TABLE[k]
@@ -232,11 +249,16 @@ def abm_core(rhs, t, y, h, k, F, head, p, rtol, atol, t_stop, comp, level, windo
     fnew = np.empty(n)
     expo = 1.0 / (k + 1)
     n_acc = 0
+    n_bad = 0
     win_start = t
     win_max = 0.0
     while True:
         if head < 0:
-            st = abm_start(rhs, t, y, h, k, F, p, K, w, START_SUBSTEPS, stats)
+            if t + (k - 1) * h > t_stop:
+                return OK, t, h, head  # the starting procedure would pass t_stop: the caller lands
+            st, j = abm_start(rhs, t, y, h, k, F, p, K, w, START_SUBSTEPS, stats, comp, level, fix)
+            if st == LEVEL:  # the level is crossed in starting interval j + 1: y is its start
+                return LEVEL, t + j * h, h, -1
             if st != OK:
                 return st, t, h, head
             t = t + (k - 1) * h
@@ -248,8 +270,16 @@ def abm_core(rhs, t, y, h, k, F, head, p, rtol, atol, t_stop, comp, level, windo
         if t + h > t_stop:
             return OK, t, h, head
         st, err = abm_step(rhs, t, y, h, k, F, head, p, ab, am, rtol, atol, yp, yc, fnew, stats)
+        if st == NON_FINITE and adapt and n_bad < MAX_BAD_TRIALS:
+            # a blow-up (the step outside the method's small stability region): as a rejection
+            n_bad += 1
+            stats[ST_REJECTED] += 1
+            h *= 0.25
+            head = -1
+            continue
         if st != OK:
             return st, t, h, head
+        n_bad = 0
         if adapt and err > 1.0:
             stats[ST_REJECTED] += 1
             h = h * max(SHRINK_MIN, (RESTART_TARGET / err) ** expo)
