@@ -36,10 +36,10 @@ def _run(k, h, t_stop, adapt=False, tol=1.0, comp=-1, level=0.0, y=None, F=None,
     ws = abm.workspace(3)
     F = ws["F"] if F is None else F
     stats = np.zeros(8, np.int64) if stats is None else stats
-    fix = np.zeros(2)
-    st, t, h, head = abm.abm_core(_oscillator, t, y, h, k, F, head, np.zeros(4), tol, np.full(3, tol),
-                                  t_stop, comp, level, 2 * math.pi, 10**7, adapt, stats, ws["K"],
-                                  ws["w"], fix)  # fmt: skip
+    fix = np.zeros(6)
+    st, t, h, head = abm.abm_core(_oscillator, t, y, h, k, F, ws["S"], head, np.zeros(4), tol,
+                                  np.full(3, tol), t_stop, comp, level, 2 * math.pi, 10**7, adapt,
+                                  stats, ws["K"], ws["w"], fix)  # fmt: skip
     return st, t, h, head, y, F, stats, fix
 
 
@@ -101,12 +101,13 @@ def test_starting_values_are_far_more_accurate_than_a_step():
     y = np.array([1.0, 0.0, 0.0])
     ws = abm.workspace(3)
     stats = np.zeros(8, np.int64)
-    st, j = abm.abm_start(_oscillator, 0.0, y, h, k, ws["F"], np.zeros(4), ws["K"], ws["w"],
-                          abm.START_SUBSTEPS, stats, -1, 0.0, np.zeros(2))  # fmt: skip
-    assert st == abm.OK and j == k - 1
+    st = abm.abm_start(_oscillator, 0.0, y, h, k, ws["F"], ws["S"], np.zeros(4), ws["K"], ws["w"],
+                       abm.START_SUBSTEPS, stats)  # fmt: skip
+    assert st == abm.OK
     t = (k - 1) * h
     assert abs(y[0] - math.cos(t)) < 1e-14 and abs(y[1] + math.sin(t)) < 1e-14
-    for j in range(k):  # the history: f(t_j, y_j) = (-sin t_j, -cos t_j, 1)
+    for j in range(k):  # the history: f(t_j, y_j) = (-sin t_j, -cos t_j, 1); S[j] = y_j
+        assert abs(ws["S"][j, 0] - math.cos(j * h)) < 1e-14 and ws["S"][j, 2] == pytest.approx(j * h)
         assert abs(ws["F"][j, 0] + math.sin(j * h)) < 1e-14
         assert abs(ws["F"][j, 1] + math.cos(j * h)) < 1e-14
     # rhs calls: 1 + (k - 1) * (2 substeps * 16 Vern9 stages + 1)
@@ -139,11 +140,12 @@ def test_level_stop_and_resume_are_bit_for_bit():
 
 
 def test_level_crossed_inside_the_starting_procedure():
-    """The stop is at the start of the starting interval that crosses the level (no history:
-    head -1), so an output between restarts is never stepped over."""
+    """The starting procedure always runs to its end (outputs never change the path); a level it
+    passed is reported with its bracket among the starting states S."""
     k, h = 9, 0.1
-    st, t, _, head, y, F, stats, fix = _run(k, h, 6.0, comp=2, level=0.35)
-    assert st == abm.LEVEL and head == -1
-    assert t == pytest.approx(0.3, abs=1e-15) and y[2] == pytest.approx(0.3, abs=1e-15)
-    assert fix[0] == pytest.approx(0.4, abs=1e-15) and fix[1] == 1.0
-    assert abs(y[0] - math.cos(0.3)) < 1e-14  # the starting values are the Vern9 ones
+    ws = abm.workspace(3)
+    st, t, _, head, y, F, stats, fix = _run(k, h, 6.0, comp=2, level=0.35, F=ws["F"])
+    assert st == abm.LEVEL_START and head == k - 1
+    assert t == pytest.approx(0.8, abs=1e-15)  # the end of the k - 1 starting intervals
+    assert int(fix[5]) == 4 and fix[0] == pytest.approx(0.4, abs=1e-15)  # bracket y2 in [0.3, 0.4]
+    assert fix[4] == 0.0  # the starting procedure began at t = 0

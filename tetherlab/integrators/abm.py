@@ -73,6 +73,8 @@ GROW_MAX = 3.0
 SHRINK_MIN = 0.2
 #: Stop status when the stop level (a component reaching a value) is crossed in a step.
 LEVEL = 6
+#: Stop status when the level was passed inside the last starting procedure (bracket in S).
+LEVEL_START = 7
 #: Vern9 substeps per starting interval.
 START_SUBSTEPS = 2
 
@@ -132,54 +134,48 @@ KMAX = max(ORDERS)
 
 
 def workspace(n: int) -> dict:
-    """Arrays the kernels need for a state of length n."""
-    return {"F": np.zeros((KMAX, n)), "K": np.empty((K_ROWS, n)), "w": np.empty((4, n))}
+    """Arrays the kernels need for a state of length n (``fix``: the level-stop values and the
+    step-size window, carried between calls)."""
+    return {"F": np.zeros((KMAX, n)), "S": np.zeros((KMAX, n)), "K": np.empty((K_ROWS, n)),
+            "w": np.empty((4, n)), "fix": np.zeros(6)}  # fmt: skip
 
 
 @njit(cache=True)
-def abm_start(rhs, t, y, h, k, F, p, K, w, nsub, stats, comp, level, fix):
+def abm_start(rhs, t, y, h, k, F, S, p, K, w, nsub, stats):
     """Starting procedure: from (t, y), k - 1 Vern9 intervals of length h (``nsub`` substeps
-    each) give y_1..y_{k-1}; F[j] = f(t + j h, y_j), j = 0..k-1 (the history slots in time
-    order, so the ring head is k - 1).  On return y holds y_{k-1}.
-
-    With ``comp >= 0`` (else -1): if y[comp] reaches ``level`` in interval j, y is left at that interval's
-    start y_{j-1}, fix = (y_j[comp], f_j[comp]), and the status is LEVEL.  Returns (status,
-    number of completed intervals)."""
+    each) give y_1..y_{k-1}; F[j] = f(t + j h, y_j) and S[j] = y_j, j = 0..k-1 (the history slots
+    in time order, so the ring head is k - 1; S keeps the starting states for a caller that must
+    land on a point inside the starting span).  On return y holds y_{k-1}.  Returns a status."""
     n = y.shape[0]
     ys = w[0]
     ynew = w[1]
-    y0 = w[2]
+    for i in range(n):
+        S[0, i] = y[i]
     st = rhs(t, ptr(y), row_ptr(F, 0), ptr(p))
     stats[ST_NRHS] += 1
     if st != 0:
         stats[ST_RHS_STATUS] = st
-        return RHS_FAILED, 0
+        return RHS_FAILED
     hs = h / nsub
     for j in range(1, k):
         t0 = t + (j - 1) * h
-        for i in range(n):
-            y0[i] = y[i]
         for s in range(nsub):
             st = erk_step(VERN9, rhs, t0 + s * hs, y, hs, p, K, ys, ynew, stats)
             if st != 0:
                 if st > 0:
                     stats[ST_RHS_STATUS] = st
-                    return RHS_FAILED, j - 1
-                return NON_FINITE, j - 1
+                    return RHS_FAILED
+                return NON_FINITE
             for i in range(n):
                 y[i] = ynew[i]
+        for i in range(n):
+            S[j, i] = y[i]
         st = rhs(t + j * h, ptr(y), row_ptr(F, j), ptr(p))
         stats[ST_NRHS] += 1
         if st != 0:
             stats[ST_RHS_STATUS] = st
-            return RHS_FAILED, j - 1
-        if comp >= 0 and y[comp] >= level:
-            fix[0] = y[comp]
-            fix[1] = F[j, comp]
-            for i in range(n):
-                y[i] = y0[i]
-            return LEVEL, j - 1
-    return OK, k - 1
+            return RHS_FAILED
+    return OK
 
 
 @njit(cache=True)
@@ -226,16 +222,19 @@ def abm_step(rhs, t, y, h, k, F, head, p, ab, am, rtol, atol, yp, yc, fnew, stat
 
 
 @njit(cache=True)
-def abm_core(rhs, t, y, h, k, F, head, p, rtol, atol, t_stop, comp, level, window, max_steps,
+def abm_core(rhs, t, y, h, k, F, S, head, p, rtol, atol, t_stop, comp, level, window, max_steps,
              adapt, stats, K, w, fix):  # fmt: skip
     """Constant-step ABM PECE of order k from (t, y) with history F (ring head ``head``).
 
-    ``head < 0``: no history yet; the starting procedure runs first (if the level is crossed
-    inside it, the stop is at the start of that starting interval, with head -1: the next call
-    starts afresh from there).  Stops (state at the start of the step, history kept, so a later
+    ``head < 0``: no history yet; the starting procedure runs first, always to its end (so
+    outputs never change the path), keeping its states in S.  Stops (history kept, so a later
     call resumes bit-for-bit):
+    * status LEVEL_START when y[comp] >= ``level`` already (passed inside the last starting
+      procedure): the bracket is S[j-1], S[j] with j = fix[5] (at t_s + (j-1) h, t_s = fix[4]),
+      fix[0] = S[j, comp];
     * status LEVEL when a step would take y[comp] to >= ``level`` (comp >= 0): y, t are the step's
       start, ``fix[0]`` = y[comp] after the step, fix[1] its derivative (for locating the level);
+      ``fix`` (float64[6]) also carries the step-size window between calls (fix[2:4]);
     * status OK when the next step would pass t_stop (the caller lands on it);
     * status 1 (MAX_STEPS) after ``max_steps`` accepted steps.
     With ``adapt`` the step changes as in the module docstring (restarts; a non-finite step is a
@@ -250,21 +249,34 @@ def abm_core(rhs, t, y, h, k, F, head, p, rtol, atol, t_stop, comp, level, windo
     expo = 1.0 / (k + 1)
     n_acc = 0
     n_bad = 0
-    win_start = t
-    win_max = 0.0
+    # the window (start, largest error) lives in fix[2:4], so a run split into calls (outputs,
+    # chunks) takes the same steps as one call
+    win_start = fix[2]
+    win_max = fix[3]
     while True:
         if head < 0:
             if t + (k - 1) * h > t_stop:
                 return OK, t, h, head  # the starting procedure would pass t_stop: the caller lands
-            st, j = abm_start(rhs, t, y, h, k, F, p, K, w, START_SUBSTEPS, stats, comp, level, fix)
-            if st == LEVEL:  # the level is crossed in starting interval j + 1: y is its start
-                return LEVEL, t + j * h, h, -1
+            st = abm_start(rhs, t, y, h, k, F, S, p, K, w, START_SUBSTEPS, stats)
             if st != OK:
                 return st, t, h, head
+            fix[4] = t
             t = t + (k - 1) * h
             head = k - 1
             win_start = t
             win_max = 0.0
+        if comp >= 0 and y[comp] >= level:
+            # the level was passed inside the last starting procedure: the bracket S[j-1], S[j]
+            j = 1
+            while j < k - 1 and S[j, comp] < level:
+                j += 1
+            fix[0] = S[j, comp]
+            fix[5] = j
+            fix[2] = win_start
+            fix[3] = win_max
+            return LEVEL_START, t, h, head
+        fix[2] = win_start
+        fix[3] = win_max
         if n_acc >= max_steps:
             return 1, t, h, head
         if t + h > t_stop:
@@ -290,6 +302,8 @@ def abm_core(rhs, t, y, h, k, F, head, p, rtol, atol, t_stop, comp, level, windo
         if comp >= 0 and yc[comp] >= level:
             fix[0] = yc[comp]
             fix[1] = fnew[comp]
+            fix[2] = win_start
+            fix[3] = win_max
             return LEVEL, t, h, head
         head += 1
         if head == k:

@@ -12,7 +12,8 @@ Output at physical times with the sigma form: with DOP853 or Vern9, inside the c
 method from the crossing step's start to the located sigma; with the Adams-Bashforth-Moulton
 method ("abm", :mod:`tetherlab.integrators.abm`) the constant-step loop stops before the step in
 which tau passes t_k/T and a Vern9 step, its length found by Newton on tau, lands on it
-(:func:`_abm_clock_run`); with the other methods (RADAU5, scipy), sigma is integrated on a coarse
+(:func:`_abm_clock_run`; an output passed inside a restart's Vern9 starting steps is landed
+from the starting state before it); with the other methods (RADAU5, scipy), sigma is integrated on a coarse
 grid (8 points a revolution) and t(sigma) = t_k is solved by a safeguarded Newton iteration whose
 evaluations are short integrations from the bracketing grid state (dt/dsigma = T/(q3^3 s^2) is
 the Newton derivative).  docs/dromo.md section 5 says why.
@@ -137,24 +138,26 @@ ABM_LANDING_ITERS = 8
 
 
 @njit(cache=True)
-def _abm_clock_run(rhs, order, sig, z, h, F, head, targets, k, p, rtol, atol, max_steps, out_sig,
-                   out_z, stats, K, w):  # fmt: skip
+def _abm_clock_run(rhs, order, sig, z, h, F, S, head, targets, k, p, rtol, atol, max_steps, out_sig,
+                   out_z, stats, K, w, fix):  # fmt: skip
     """Sigma-form outputs k, k+1, ... with the constant-step ABM method (compiled loop).
 
     :func:`tetherlab.integrators.abm.abm_core` runs until the step in which tau would pass
-    targets[k]; from that step's start (sig, z) a Vern9 step of length d lands on it, d by Newton
-    on tau(sig + d) = targets[k] with dtau/dsigma = 1/(q3^3 s^2) (sheet s5).  The ABM run then
-    resumes from the same step start with its history (bit-for-bit: outputs do not move the
-    path).  The time residual left after the last Newton step is the caller's (Kepler drift, as
-    with :func:`_clock_run`).  Returns (status, sig, h, head, k)."""
+    targets[k] (status LEVEL: land from the step's start (sig, z)), or reports that it was passed
+    inside its last starting procedure (LEVEL_START: land from the starting state before it,
+    kept in S).  A Vern9 step of length d lands on it, d by Newton on tau(sig + d) = targets[k]
+    with dtau/dsigma = 1/(q3^3 s^2) (sheet s5).  The ABM run then resumes with its history:
+    outputs do not move the path.  The time residual left after the last Newton step is the
+    caller's (Kepler drift, as with :func:`_clock_run`).  Returns (status, sig, h, head, k)."""
     n = z.shape[0]
     m = targets.shape[0]
-    fix = np.zeros(2)
     ys = np.empty(n)
     zn = np.empty(n)
+    z0 = np.empty(n)
     acc0 = stats[ST_ACCEPTED]
     while k < m:
-        if targets[k] <= z[0]:
+        tk = targets[k]
+        if head < 0 and tk <= z[0]:  # an output at the start state (nothing integrated yet)
             out_sig[k] = sig
             out_z[k, :] = z
             k += 1
@@ -162,32 +165,38 @@ def _abm_clock_run(rhs, order, sig, z, h, F, head, targets, k, p, rtol, atol, ma
         left = max_steps - (stats[ST_ACCEPTED] - acc0)
         if left <= 0:
             return MAX_STEPS_STATUS, sig, h, head, k
-        st, sig, h, head = _abm.abm_core(rhs, sig, z, h, order, F, head, p, rtol, atol, 1e300, 0,
-                                         targets[k], TWO_PI, left, True, stats, K, w, fix)  # fmt: skip
-        if st == MAX_STEPS_STATUS:
+        st, sig, h, head = _abm.abm_core(rhs, sig, z, h, order, F, S, head, p, rtol, atol, 1e300,
+                                         0, tk, TWO_PI, left, True, stats, K, w, fix)  # fmt: skip
+        if st == _abm.LEVEL:
+            s0 = sig
+            for i in range(n):
+                z0[i] = z[i]
+        elif st == _abm.LEVEL_START:
+            j = int(fix[5])
+            s0 = fix[4] + (j - 1) * h
+            for i in range(n):
+                z0[i] = S[j - 1, i]
+        else:
             return st, sig, h, head, k
-        if st != _abm.LEVEL:
-            return st, sig, h, head, k
-        tk = targets[k]
-        d = h * (tk - z[0]) / (fix[0] - z[0])
+        d = h * (tk - z0[0]) / (fix[0] - z0[0])
         d_used = d
         for _ in range(ABM_LANDING_ITERS):
             d_used = d
-            st2 = erk_step(VERN9, rhs, sig, z, d, p, K, ys, zn, stats)
+            st2 = erk_step(VERN9, rhs, s0, z0, d, p, K, ys, zn, stats)
             if st2 != 0:
                 if st2 > 0:
                     stats[ST_RHS_STATUS] = st2
                     return RHS_FAILED_STATUS, sig, h, head, k
                 return NON_FINITE_STATUS, sig, h, head, k
             g = zn[0] - tk
-            c = math.cos(sig + d)
-            sn = math.sin(sig + d)
+            c = math.cos(s0 + d)
+            sn = math.sin(s0 + d)
             s = 1.0 + zn[1] * c + zn[2] * sn
             dd = g * zn[3] * zn[3] * zn[3] * s * s
-            if abs(dd) <= 4e-16 * max(1.0, abs(sig)):
+            if abs(dd) <= 4e-16 * max(1.0, abs(s0)):
                 break
             d -= dd
-        out_sig[k] = sig + d_used
+        out_sig[k] = s0 + d_used
         out_z[k, :] = zn
         k += 1
     return OK_STATUS, sig, h, head, k
@@ -295,9 +304,9 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
         acc = int(stats[ST_ACCEPTED])
         if is_abm:
             status, sig, h, head, k = _abm_clock_run(dromo_sigma_rhs, ABM_ORDER, sig, z, h, ws["F"],
-                                                     head, targets, k, p_ext, float(rtol), atol_v,
+                                                     ws["S"], head, targets, k, p_ext, float(rtol), atol_v,
                                                      min(CLOCK_CHUNK_STEPS, budget), out_sig, out_z,
-                                                     stats, ws["K"], ws["w"])  # fmt: skip
+                                                     stats, ws["K"], ws["w"], ws["fix"])  # fmt: skip
         else:
             status, sig, h, k, sig_max = _clock_run(kind, dromo_sigma_rhs, dromo_clock_event, sig, z,
                                                     h, targets, k, p_ext, float(rtol), atol_v,
