@@ -336,7 +336,7 @@ def report_md(rows, heyoka_note: str | None, quick: bool = False) -> str:
                "What the two clocks cover (measured once on this machine, Stiefel at 1e-13): tetherlab's first run in a "
                "process takes 1-10 % longer than its repeats, heyoka's timed run follows a warm-up one. tetherlab's "
                "wall time for DROMO with dop853 covers the whole compiled loop, output-time search included "
-               "(tetherlab/formulations/dromo.py, _clock_run); the Python set-up and output conversion around it "
+               "(tetherlab/propagation/dromo.py, _clock_run); the Python set-up and output conversion around it "
                "(about 0.1 ms) is outside. With radau5 it covers the sigma pass only: the Newton search for the "
                "final time and its Python glue add a few dozen steps and about 15-20 % of wall time, so those "
                "points are that much optimistic against heyoka's whole propagate_until.", ""]

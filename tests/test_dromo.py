@@ -19,6 +19,7 @@ import pytest
 from tests.helpers import SCENES
 from tetherlab.errors import SceneError
 from tetherlab.formulations import dromo
+from tetherlab.propagation import dromo as drive
 from tetherlab.pipeline import simulate
 from tetherlab.scene import Scene, load_scene
 
@@ -201,10 +202,10 @@ def _stiefel_sigma_run(t_out, method="dop853", tol=1e-11):
     mu = prep.mu_m3_s2
     L = float(np.linalg.norm(prep.y0[:3]))
     pe = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
-    return dromo.integrate_sigma(method, pe, prep.y0[:3], prep.y0[3:6], t_out, tol, tol, mu, L), prep
+    return drive.integrate_sigma(method, pe, prep.y0[:3], prep.y0[3:6], t_out, tol, tol, mu, L), prep
 
 
-@pytest.mark.parametrize("method", ["dop853", "vern9"])
+@pytest.mark.parametrize("method", ["dop853", "vern9", "abm"])
 def test_sigma_clock_outputs_do_not_alter_the_trajectory(method):
     """The compiled clock loop restarts from the start of the crossing step after each output,
     so the outputs do not move the integration's path: the only difference is that a restart
@@ -214,7 +215,7 @@ def test_sigma_clock_outputs_do_not_alter_the_trajectory(method):
     many, _ = _stiefel_sigma_run(np.linspace(0.0, t_f, 37), method)
     assert few.status == 0 and many.status == 0, (few.message, many.message)
     # measured 0.5 mm (DOP853) and 0.12 mm (Vern9) after 20 days at tol 1e-11, with the same step
-    # count; the integration's own error there is ~6 cm (0.87 m over 50 revolutions, Figure-3
+    # count (ABM: outputs are landed from saved states, its path does not depend on them); the integration's own error there is ~6 cm (0.87 m over 50 revolutions, Figure-3
     # table): bound 2 mm
     assert np.linalg.norm(few.y[-1, :3] - many.y[-1, :3]) < 2e-3
     assert few.stats["n_accepted"] == many.stats["n_accepted"]
@@ -224,7 +225,7 @@ def test_sigma_clock_outputs_do_not_alter_the_trajectory(method):
     assert many.stats["time_residual_max_s"] < 1e-3
 
 
-@pytest.mark.parametrize("method", ["dop853", "vern9"])
+@pytest.mark.parametrize("method", ["dop853", "vern9", "abm"])
 def test_sigma_clock_agrees_with_the_grid_search(method):
     """The compiled clock (DOP853 or Vern9) and the sigma grid + Newton search (the other
     methods' path, here run with DOP853) give the same states at the same output times, to the
@@ -236,8 +237,8 @@ def test_sigma_clock_agrees_with_the_grid_search(method):
     from tetherlab.kernel.layout import FORM_DROMO_SIGMA
 
     pe = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
-    grid = dromo._integrate_sigma_grid("dop853", pe, prep.y0[:3], prep.y0[3:6], t_out, 1e-12, 1e-12,
-                                       mu, L, 0.0, 10**7, None, dromo.GRID_PER_REV)  # fmt: skip
+    grid = drive._integrate_sigma_grid("dop853", pe, prep.y0[:3], prep.y0[3:6], t_out, 1e-12, 1e-12,
+                                       mu, L, 0.0, 10**7, None, drive.GRID_PER_REV)  # fmt: skip
     assert clock.status == 0 and grid.status == 0
     # both at 1e-12 over 3.5 revolutions of the Stiefel orbit (about 4 cm/revolution at 1e-11 in
     # the Figure-3 table): they differ by the outputs' path (and the method) only; bound 1 cm
@@ -245,7 +246,7 @@ def test_sigma_clock_agrees_with_the_grid_search(method):
     assert dr < 1e-2, dr
 
 
-@pytest.mark.parametrize("method", ["dop853", "vern9"])
+@pytest.mark.parametrize("method", ["dop853", "vern9", "abm"])
 def test_sigma_clock_reports_a_failure_with_the_rows_before_it(method):
     """A step budget that runs out mid-way returns the rows computed so far and says why."""
     res, _ = _stiefel_sigma_run(np.linspace(0.0, 20 * 86400.0, 11), method)
@@ -257,7 +258,7 @@ def test_sigma_clock_reports_a_failure_with_the_rows_before_it(method):
     mu = prep.mu_m3_s2
     L = float(np.linalg.norm(prep.y0[:3]))
     pe = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
-    cut = dromo.integrate_sigma(method, pe, prep.y0[:3], prep.y0[3:6], res.t, 1e-11, 1e-11, mu, L,
+    cut = drive.integrate_sigma(method, pe, prep.y0[:3], prep.y0[3:6], res.t, 1e-11, 1e-11, mu, L,
                                 max_steps=full // 2)  # fmt: skip
     assert cut.status == 1 and "step" in cut.message.lower()
     assert 1 <= cut.t.size < res.t.size

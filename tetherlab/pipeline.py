@@ -214,12 +214,8 @@ def prepare(scene) -> Prepared:
         duration = scene.duration_orbits * period
     t_out = _output_times(scene.output, duration)
     h_max = scene.integrator.max_step_s or 0.0
-    formulation = _formulation(scene, model, tethers, y0)
-    if event_names and formulation != "cowell":
-        raise SceneError(
-            "integrator.formulation", "'cowell' for a scene with events (tension_only tethers or [stop]: "
-            "located by the Cowell path only for now)", repr(scene.integrator.formulation),
-        )
+    # events are located in time: with DROMO they run the time form (docs/dromo.md section 8)
+    formulation = _formulation(scene, model, tethers, y0, bool(event_names))
     return Prepared(
         model=model,
         y0=y0,
@@ -281,7 +277,7 @@ def _static_start(scene, root, tethers, specs, effects, central, nq, y0):
     return eq.y, eq.holding_force_N
 
 
-def _formulation(scene, model: Model, tethers, y0: np.ndarray) -> str:
+def _formulation(scene, model: Model, tethers, y0: np.ndarray, events: bool = False) -> str:
     """The formulation the integrator runs, checked against the scene (docs/dromo.md section 7)."""
     name = scene.integrator.formulation
     if name == "cowell":
@@ -293,7 +289,7 @@ def _formulation(scene, model: Model, tethers, y0: np.ndarray) -> str:
         raise SceneError(key, "'cowell' when [effects] does not name central_gravity (DROMO builds it in)", repr(name))
     if model.root_fixed:
         raise SceneError(key, "'cowell' for a scene whose root body is fixed (it has no orbit)", repr(name))
-    if name == "dromo" and not tethers:
+    if name == "dromo" and not tethers and not events:
         if scene.integrator.max_step_s is not None:
             raise SceneError(
                 "integrator.max_step", "no max_step with formulation 'dromo' on a point mass (the independent "
@@ -547,21 +543,23 @@ def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
     """DROMO run with outputs converted back to Cowell states [r0, d, v0, d'] (docs/dromo.md 7)."""
     from .formulations import dromo
     from .kernel.layout import FORM_DROMO_SIGMA, FORM_DROMO_TIME
+    from .propagation import dromo as drive
 
     h = prep.y0.size // 2
     length_m = float(np.linalg.norm(prep.y0[:3]))  # L = |r0| (docs/dromo.md section 2)
     if prep.formulation == "dromo-sigma":
         pe = dromo.attach(p, FORM_DROMO_SIGMA, prep.mu_m3_s2, length_m, prep.y0.size)
-        res = dromo.integrate_sigma(
+        res = drive.integrate_sigma(
             prep.method, pe, prep.y0[:3], prep.y0[h : h + 3], prep.t_out, prep.rtol,
             prep.atol[0] / prep.ref_radius_m, prep.mu_m3_s2, length_m, max_steps=prep.max_steps,
             progress=progress,
         )  # fmt: skip
     else:
         pe = dromo.attach(p, FORM_DROMO_TIME, prep.mu_m3_s2, length_m, prep.y0.size)
-        res = dromo.integrate_time(
+        res = drive.integrate_time(
             prep.method, pe, prep.y0, prep.t_out, prep.rtol, prep.atol, prep.mu_m3_s2, length_m,
             h_max=prep.h_max, max_steps=prep.max_steps, progress=progress,
+            n_events=len(prep.event_names), terminal=prep.event_terminal,
         )  # fmt: skip
     return res, pe
 

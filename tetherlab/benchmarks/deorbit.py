@@ -56,9 +56,14 @@ def run_until_altitude(scene, stop_altitude_m=STOP_ALTITUDE_M, max_days=200) -> 
     sc = scene.replace(**{"duration": f"{max_days} d", "stop.altitude": f"{stop_altitude_m} m"})
     prep = prepare(sc)
     p = prep.model.fresh_params()
-    res = integrate(prep.method, cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol,
-                    h_max=prep.h_max, max_steps=prep.max_steps, second_order=True,
-                    **_event_args(prep))  # fmt: skip
+    if prep.formulation != "cowell":  # DROMO: the time form, the stop located as with Cowell
+        from ..pipeline import _integrate_dromo
+
+        res, _ = _integrate_dromo(prep, p, None)
+    else:
+        res = integrate(prep.method, cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol,
+                        h_max=prep.h_max, max_steps=prep.max_steps, second_order=True,
+                        **_event_args(prep))  # fmt: skip
     stats = {k: v for k, v in res.stats.items() if isinstance(v, (int, float))}
     crossing = float(res.t[-1]) if res.stopped_by is not None else float("nan")
     message = f"altitude {stop_altitude_m:g} m reached at t = {crossing:.9g} s" if res.stopped_by is not None else res.message

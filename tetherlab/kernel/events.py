@@ -17,7 +17,7 @@ import math
 
 from numba import carray
 
-from .._jit import rhs_cfunc
+from .._jit import njit, rhs_cfunc
 from .layout import (
     H_EV_STOP_R,
     H_LEN,
@@ -38,11 +38,11 @@ from .layout import (
 SQ3 = math.sqrt(3.0)
 
 
-@rhs_cfunc
-def system_events(t, y_ptr, g_ptr, p_ptr):
-    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+@njit(cache=True)
+def event_values(t, y, g_ptr, p):
+    """The event components of the Cowell state y (length p[H_NSTATE]) into g_ptr[0..]; also
+    called by other formulations on the Cowell state they rebuild (formulations/dromo.py)."""
     n = int(p[H_NSTATE])
-    y = carray(y_ptr, (n,))
     h = n // 2
     k = 0
     r_stop = p[H_EV_STOP_R]
@@ -72,6 +72,13 @@ def system_events(t, y_ptr, g_ptr, p_ptr):
                 el = min(el, el + damp * epsd)
             g_ptr[k] = el
             k += 1
+    return 0
+
+
+@rhs_cfunc
+def system_events(t, y_ptr, g_ptr, p_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    event_values(t, carray(y_ptr, (int(p[H_NSTATE]),)), g_ptr, p)
     return 0
 
 
