@@ -143,6 +143,8 @@ def _print_table(title, rows):
 EXTRA_SECTIONS = (
     ("stiefel", "Stiefel-Scheifele: tetherlab's best method against heyoka at 1 m and 1 mm final error (issue 3)"),
     ("deorbit", "Electrodynamic de-orbit, n = 1, whole mission, every integrator (issue 3)"),
+    ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity (issue 13)"),
+    ("igrf", "IGRF-14 field: cost of one evaluation against the degree (issue 13)"),
 )
 
 
