@@ -378,3 +378,14 @@ def test_eclipse_switches_the_constant_current_off():
     dark = electrodynamic.rod_density(p, par, 0.0, *(-7.4e6 * u), 2500.0, 0.0, 0.0)
     assert dark == (0.0, 0.0, 0.0)
     assert max(abs(c) for c in lit) > 0.0
+
+
+def test_eclipse_epoch_outside_de421_is_a_scene_error():
+    # DE421 covers 1899-07-29 to 2053-10-09 TDB (tetherlab/ephemeris.py); the Sun of the shadow
+    # function comes from it
+    from tetherlab.pipeline import prepare
+
+    sc = _ed_scene(**{"epoch": "1850-01-01T00:00:00", "effects.electrodynamic.eclipse": "conical", "duration": "1 d"})
+    with pytest.raises(SceneError) as err:
+        prepare(sc)
+    assert err.value.key == "epoch"
