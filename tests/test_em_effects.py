@@ -187,20 +187,20 @@ def test_drag_force_on_body_and_rod():
     np.testing.assert_array_equal(p[par : par + len(vals)], vals)
     x = R + 400e3
     v = 7.67e3
-    fx, fy, fz = drag.body_force(p, par, 0, x, 0.0, 0.0, 0.0, v, 0.0)
+    fx, fy, fz = drag.body_force(p, par, 0.0, 0, x, 0.0, 0.0, 0.0, v, 0.0)
     # -1/2 rho Cd A |v_r| v_r with v_r = v - omega_E x (co-rotating air), rho = 3.725e-12 (Table 8-4)
     vr = v - OMEGA_E * x
     assert fy == pytest.approx(-0.5 * 3.725e-12 * 2.2 * 2.0 * vr * vr, rel=1e-12)
     assert fx == 0.0 and fz == 0.0
-    fx, fy, fz = drag.body_force(p, par, 1, x, 0.0, 0.0, 0.0, v, 0.0)
+    fx, fy, fz = drag.body_force(p, par, 0.0, 1, x, 0.0, 0.0, 0.0, v, 0.0)
     assert fy == pytest.approx(-0.5 * 3.725e-12 * 2.0 * 0.5 * vr * vr, rel=1e-12)
     # rod element with tangent dr/dxi = (L/2) x^ (vertical): all of v_r is normal;
     # per unit xi: -1/2 rho Cd_t D (L/2) |v_r| v_r
     t_len = 2500.0
-    f = drag.rod_density(p, par, 0, x, 0.0, 0.0, 0.0, v, 0.0, t_len, 0.0, 0.0)
+    f = drag.rod_density(p, par, 0.0, 0, x, 0.0, 0.0, 0.0, v, 0.0, t_len, 0.0, 0.0)
     assert f[1] == pytest.approx(-0.5 * 3.725e-12 * 2.4 * 1.2e-3 * t_len * vr * vr, rel=1e-12)
     # tangent along the relative velocity: no normal component, no force
-    f = drag.rod_density(p, par, 0, x, 0.0, 0.0, 0.0, v, 0.0, 0.0, t_len, 0.0)
+    f = drag.rod_density(p, par, 0.0, 0, x, 0.0, 0.0, 0.0, v, 0.0, 0.0, t_len, 0.0)
     assert max(abs(c) for c in f) < 1e-30
 
 

@@ -146,6 +146,8 @@ EXTRA_SECTIONS = (
     ("deorbit", "Electrodynamic de-orbit, n = 1, whole mission, every integrator (issue 3)"),
     ("cost_vs_n", "Cost per simulated orbit against the rod count, bench-libration rtol 1e-8, "
                   "damped and undamped; last rows: fitted exponents (issue 11)"),
+    ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity (issue 13)"),
+    ("igrf", "IGRF-14 field: cost of one evaluation against the degree (issue 13)"),
 )
 
 

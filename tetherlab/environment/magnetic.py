@@ -19,7 +19,9 @@ Constants (SI):
 | EARTH_ROTATION_RATE_RAD_S | 7.292115e-5 rad/s | WGS 84 (NIMA TR8350.2, table 3.1) |
 
 All kernels take SI floats only; the Earth's rotation enters through the angle
-theta(t) = greenwich_angle + omega_E t of the Earth-fixed x axis from the inertial x axis.
+theta(t) = theta_0 + omega_E t of the Earth-fixed x axis from the inertial x axis; theta_0 is the
+explicit greenwich_angle or the ERA of the scene's epoch (earth_orientation.py).  Field "igrf14":
+IGRF-14 to degree 13 (igrf.py) in the same rotating axes.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from __future__ import annotations
 import math
 
 from .._jit import njit
+from . import igrf
 from .earth import EARTH_ROTATION_RATE_RAD_S
 
 IGRF13_G10_T = -29404.8e-9
@@ -49,19 +52,26 @@ IGRF13_AXIS_ECEF = tuple(
 #: Field model codes stored in the parameter block.
 FIELD_ALIGNED = 0
 FIELD_TILTED = 1
-FIELD_CODES = {"aligned": FIELD_ALIGNED, "tilted": FIELD_TILTED}
+FIELD_IGRF = 2  # IGRF-14 to degree 13 (environment/igrf.py), Earth-fixed, rotating with the Earth
+FIELD_CODES = {"aligned": FIELD_ALIGNED, "tilted": FIELD_TILTED, "igrf14": FIELD_IGRF}
 
 
-def pack_field(model: str, strength_t_m3: float, greenwich_angle_rad: float) -> list[float]:
-    """The 6 floats the kernel :func:`field` reads: code, |K|, unit axis in Earth-fixed axes, angle."""
+def pack_field(model: str, strength_t_m3: float, greenwich_angle_rad: float, igrf_block=None) -> list[float]:
+    """The floats the kernel :func:`field` reads: code, |K|, unit axis in Earth-fixed axes, angle
+    (6 floats), followed for "igrf14" by the IGRF block of environment/igrf.py (``igrf_block``)."""
     if model == "aligned":
         axis = (0.0, 0.0, -1.0)  # along -z: the sign of g10 (the field points north at the equator)
     else:
         axis = IGRF13_AXIS_ECEF
-    return [float(FIELD_CODES[model]), strength_t_m3, *axis, greenwich_angle_rad]
+    out = [float(FIELD_CODES[model]), strength_t_m3, *axis, greenwich_angle_rad]
+    if model == "igrf14":
+        if igrf_block is None:
+            raise ValueError("field 'igrf14' needs its coefficient block (environment/igrf.py pack)")
+        out += list(igrf_block)
+    return out
 
 
-FIELD_NPAR = 6
+FIELD_NPAR = 6  # floats before the IGRF block
 
 
 @njit(cache=True)
@@ -83,15 +93,74 @@ def field(p, par, t, x, y, z):
     """Field (T) at inertial r (m), time t (s since the scene epoch), for the packed model at p[par:].
 
     aligned: K = |K| (0, 0, -1), fixed in inertial axes.  tilted: the Earth-fixed axis rotated
-    about z by theta(t) = greenwich_angle + omega_E t.
+    about z by theta(t) = theta_0 + omega_E t.  igrf14: IGRF-14 in Earth-fixed axes, same rotation
+    (theta_0: the ERA of the epoch or the explicit greenwich_angle, earth_orientation.py).
     """
+    code = int(p[par])
+    if code == FIELD_IGRF:
+        # inertial -> Earth-fixed (rotation by -theta about z), IGRF there, and back
+        th = p[par + 5] + EARTH_ROTATION_RATE_RAD_S * t
+        c = math.cos(th)
+        sn = math.sin(th)
+        bx, by, bz = igrf.field_ecef(p, par + FIELD_NPAR, t, c * x + sn * y, -sn * x + c * y, z)
+        return c * bx - sn * by, sn * bx + c * by, bz
     s = p[par + 1]
     ax = p[par + 2]
     ay = p[par + 3]
     az = p[par + 4]
-    if int(p[par]) == FIELD_TILTED:
+    if code == FIELD_TILTED:
         th = p[par + 5] + EARTH_ROTATION_RATE_RAD_S * t
         c = math.cos(th)
         sn = math.sin(th)
         ax, ay = c * ax - sn * ay, sn * ax + c * ay
     return dipole(s * ax, s * ay, s * az, x, y, z)
+
+
+def pack_field_for(params: dict, ctx: dict, effect: str) -> list[float]:
+    """The field block of an effect with ``field``, ``dipole_strength`` and ``greenwich_angle``:
+    validates the epoch against the model's range (IGRF: its coefficient file's) and picks the
+    Earth rotation angle (earth_orientation.rotation_angle_at_start: an explicit greenwich_angle
+    wins over the epoch's ERA).  Reports the choice in ``ctx["meta"][effect]``."""
+    from ..errors import SceneError
+    from . import earth_orientation
+
+    model = params["field"]
+    strength = params["dipole_strength"]
+    if not strength > 0.0:
+        raise SceneError(f"effects.{effect}.dipole_strength", "a dipole strength > 0 (e.g. '8e15 T m3')", repr(strength))
+    meta = ctx.setdefault("meta", {}).setdefault(effect, {})
+    if model == "aligned":
+        meta["field"] = "aligned dipole"
+        return pack_field(model, strength, 0.0)
+    blk = None
+    if model == "igrf14":
+        epoch = ctx.get("epoch")
+        if epoch is None:
+            raise SceneError("epoch", f"an ISO date (TDB) for effects.{effect}.field = 'igrf14' (IGRF is dated)", "nothing")
+        first, last = igrf.validity()
+        date = igrf.epoch_datetime(epoch)
+        duration = ctx.get("duration_s") or 0.0
+        import datetime as _dt
+
+        end = date + _dt.timedelta(seconds=float(duration))
+        if date < first or end > last:
+            raise SceneError(
+                "epoch",
+                f"a run inside {igrf.GENERATION}'s coefficients ({first.date()} to {last.date()}) for effects.{effect}.field",
+                f"{epoch!r} to {end.isoformat(timespec='seconds')}",
+            )
+        blk = igrf.pack(date)
+        meta["field"] = f"{igrf.GENERATION} degree {igrf.NMAX} ({igrf.coefficient_file()} via ppigrf), coefficients at {date.isoformat()}"
+    else:
+        meta["field"] = "tilted dipole (IGRF-13 2020 axis)"
+    angle, how = earth_orientation.rotation_angle_at_start(params, ctx, effect)
+    meta["earth_rotation_angle_rad"] = angle
+    meta["earth_rotation_angle_source"] = how
+    return pack_field(model, strength, angle, blk)
+
+
+def field_block_size(p, par) -> int:
+    """Length of the field block at p[par] (6, or 6 + the IGRF block)."""
+    if int(p[par]) == FIELD_IGRF:
+        return FIELD_NPAR + igrf.block_size(int(p[par + FIELD_NPAR]))
+    return FIELD_NPAR

@@ -1,9 +1,10 @@
-"""Electrodynamic (Lorentz) force of a constant current along each tether in a dipole field.
+"""Electrodynamic (Lorentz) force of a constant current along each tether in the geomagnetic field.
 
-Force per unit of the rod coordinate xi: dF/dxi = I (dr/dxi) x B(r); on a straight rod in a
+Force per unit of the rod coordinate xi: dF/dxi = nu I (dr/dxi) x B(r); on a straight rod in a
 uniform field the total is I L_a u x B.  No force on point masses.  The half-rod totals R_1, R_2
 and the correction F_TP of paper eq. 13 follow from the Gauss-Legendre quadrature of this density
-in tether/chain.py (docs/effects-electrodynamic.md, section 2).
+in tether/chain.py (docs/effects-electrodynamic.md, section 2).  nu is the sunlit fraction of the
+``eclipse`` switch (1 when it is "none"): a current off in the Earth's shadow.
 
 Sign convention: a positive current flows from end A_1 (the tether's ``from`` body) towards B_n
 (its ``to`` body), i.e. along dr/dxi.  On a prograde orbit with the ``to`` body above the
@@ -15,40 +16,46 @@ Reference: paper section 5 (constant current, dipole aligned with the rotation a
 | parameter | unit | required | meaning |
 |-----------|------|----------|---------|
 | current | A | yes | current along every tether, > 0 from ``from`` to ``to`` |
-| field | choice | no ("aligned") | "aligned": dipole along -z (rotation axis); "tilted": IGRF-13 2020 dipole axis, rotating with the Earth |
-| dipole_strength | T m3 | no (IGRF-13 2020, 7.71e15 T m3) | |K| = mu_0 m / (4 pi) of the dipole |
-| greenwich_angle | rad | no (0 deg) | "tilted" only: angle of the Greenwich meridian from the inertial x axis at t = 0 |
+| field | choice | no ("aligned") | "aligned": dipole along -z (rotation axis); "tilted": IGRF-13 2020 dipole axis, rotating with the Earth; "igrf14": IGRF-14 to degree 13 at the scene's epoch (environment/igrf.py) |
+| dipole_strength | T m3 | no (IGRF-13 2020, 7.71e15 T m3) | |K| = mu_0 m / (4 pi) of the dipole (dipole fields only) |
+| greenwich_angle | rad | no | Earth-fixed fields: angle of the Greenwich meridian from the inertial x axis at t = 0; if given it wins over the epoch's Earth rotation angle (environment/earth_orientation.py); without it and without an epoch, 0 |
+| eclipse | choice | no ("none") | "cylindrical" or "conical": the current times the sunlit fraction (needs the epoch: Sun from DE421) |
 """
 
 from __future__ import annotations
 
-from ..environment import magnetic
-from ..errors import SceneError
+from ..environment import eclipse, magnetic
 from .registry import EffectSpec, ParamSpec, register
 
 CODE = 20
 
 
 def _pack(params, central, ctx):
-    strength = params["dipole_strength"]
-    if not strength > 0.0:
-        raise SceneError("effects.electrodynamic.dipole_strength", "a dipole strength > 0 (e.g. '8e15 T m3')", repr(strength))
-    return [params["current"], *magnetic.pack_field(params["field"], strength, params["greenwich_angle"])]
+    field = magnetic.pack_field_for(params, ctx, "electrodynamic")
+    shadow = eclipse.pack(params.get("eclipse", "none"), ctx, central["radius_m"], "electrodynamic")
+    # [current, offset of the eclipse block from par, field block..., eclipse block...]
+    return [params["current"], float(2 + len(field)), *field, *shadow]
 
+
+FIELD_PARAMS = {
+    "field": ParamSpec("", required=False, default="aligned", choices=tuple(magnetic.FIELD_CODES),
+                       doc="geomagnetic field model"),
+    "dipole_strength": ParamSpec("T m3", required=False, default=magnetic.IGRF13_DIPOLE_T_M3,
+                                 doc="|K| = mu_0 m / (4 pi); default IGRF-13 2020 (dipole fields)"),
+    "greenwich_angle": ParamSpec("rad", required=False, default=None,
+                                 doc="Earth rotation angle at t = 0 (override of the epoch's ERA)"),
+    "eclipse": ParamSpec("", required=False, default="none", choices=tuple(eclipse.ECLIPSE_CODES),
+                         doc="current switched by the sunlit fraction of this shadow model"),
+}
 
 SPEC = register(
     EffectSpec(
         name="electrodynamic",
         code=CODE,
-        doc="Lorentz force I dr x B of a constant current along every tether in a dipole field.",
+        doc="Lorentz force I dr x B of a constant current along every tether (dipole or IGRF-14 field).",
         params={
             "current": ParamSpec("A", doc="current, > 0 flowing from the tether's `from` body to its `to` body"),
-            "field": ParamSpec("", required=False, default="aligned", choices=tuple(magnetic.FIELD_CODES),
-                               doc="dipole model"),
-            "dipole_strength": ParamSpec("T m3", required=False, default=magnetic.IGRF13_DIPOLE_T_M3,
-                                         doc="|K| = mu_0 m / (4 pi); default IGRF-13 2020"),
-            "greenwich_angle": ParamSpec("rad", required=False, default=0.0,
-                                         doc="Earth rotation angle at t = 0 (tilted field only)"),
+            **FIELD_PARAMS,
         },
         velocity_dependent=False,  # the current is prescribed, not driven by the motional EMF
         conservative=False,
@@ -62,9 +69,11 @@ from .._jit import njit  # noqa: E402
 
 @njit(cache=True)
 def rod_density(p, par, t, x, y, z, tx, ty, tz):
-    """I (dr/dxi) x B(r): force per unit xi (N) on a rod element at r with tangent dr/dxi."""
-    current = p[par]
-    bx, by, bz = magnetic.field(p, par + 1, t, x, y, z)
+    """nu I (dr/dxi) x B(r): force per unit xi (N) on a rod element at r with tangent dr/dxi."""
+    current = p[par] * eclipse.sunlit_fraction(p, par + int(p[par + 1]), t, x, y, z)
+    if current == 0.0:
+        return 0.0, 0.0, 0.0
+    bx, by, bz = magnetic.field(p, par + 2, t, x, y, z)
     return (
         current * (ty * bz - tz * by),
         current * (tz * bx - tx * bz),

@@ -24,6 +24,7 @@ from ..forces import applied_force, central_gravity, uniform_gravity
 from ..forces import stiefel_moon  # Stiefel-Scheifele analytic Moon, code 30
 from ..forces import third_body, zonal  # gravity family, codes 10-13
 from ..forces import drag, electrodynamic  # codes 20-29
+from ..forces import oml  # code 22: OML bare-tether current (issue 13)
 from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_CNT, H_OFF_EFF
 
 
@@ -104,7 +105,7 @@ def _other_body(p, code, par, t, body, x, y, z, vx, vy, vz, mass):
         fy += mass * ay
         fz += mass * az
     elif code == drag.CODE:  # (electrodynamic: no force on point masses)
-        ax, ay, az = drag.body_force(p, par, body, x, y, z, vx, vy, vz)
+        ax, ay, az = drag.body_force(p, par, t, body, x, y, z, vx, vy, vz)
         fx += ax
         fy += ay
         fz += az
@@ -166,7 +167,7 @@ def _other_rod(p, code, par, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_x
         fy += ay
         fz += az
     elif code == drag.CODE:
-        ax, ay, az = drag.rod_density(p, par, rod, x, y, z, vx, vy, vz, tx, ty, tz)
+        ax, ay, az = drag.rod_density(p, par, t, rod, x, y, z, vx, vy, vz, tx, ty, tz)
         fx += ax
         fy += ay
         fz += az
@@ -175,6 +176,11 @@ def _other_rod(p, code, par, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_x
         fx += mass_per_xi * ax
         fy += mass_per_xi * ay
         fz += mass_per_xi * az
+    elif code == oml.CODE:
+        ax, ay, az = oml.rod_density(p, par, rod, t, x, y, z, vx, vy, vz, tx, ty, tz)
+        fx += ax
+        fy += ay
+        fz += az
     return fx, fy, fz
 
 
