@@ -734,3 +734,24 @@ def test_pd_control_follows_its_single_axis_ode():
     assert d["b.control_z_N_m"].iloc[0] == pytest.approx(-kp * 2 * math.sin(th0 / 2), rel=1e-14)
     assert d["b.wz.torque_N_m"].iloc[0] == pytest.approx(kp * 2 * math.sin(th0 / 2), rel=1e-14)
     assert abs(d["b.control_x_N_m"].iloc[0]) < 1e-15 and abs(d["b.control_y_N_m"].iloc[0]) < 1e-15
+
+
+def test_radau5_second_order_split_with_the_attitude_block():
+    # The driver passes RADAU5 M1 = NQT (y = [q, q', attitude, wheels], q' exact for the first NQT
+    # components; docs/model.md 12.1).  The reduced Newton systems are exact reformulations of
+    # the full ones, so the run matches the full-Newton run (M1 = 0) up to the Newton stopping
+    # and round-off in each step: bound N_steps x atol per component (the local tolerance summed
+    # over the steps taken).
+    from tetherlab.formulations.cowell import cowell_rhs
+    from tetherlab.integrators.driver import integrate
+
+    sc = rigid_tree_scene().replace(duration="5 s")
+    prep = prepare(sc)
+    runs = {}
+    for m1 in (prep.model.n_qt, 0):
+        p = prep.model.fresh_params()
+        runs[m1] = integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, p, 1e-9, prep.atol * 1e-1, second_order=m1)
+        assert runs[m1].status == 0
+    n_steps = runs[0].stats["n_accepted"] + runs[0].stats["n_rejected"]
+    diff = np.abs(runs[prep.model.n_qt].y - runs[0].y) / (prep.atol * 1e-1)
+    assert diff.max() <= n_steps
