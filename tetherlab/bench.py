@@ -148,6 +148,7 @@ EXTRA_SECTIONS = (
                   "damped and undamped; last rows: fitted exponents (issue 11)"),
     ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity (issue 13)"),
     ("igrf", "IGRF-14 field: cost of one evaluation against the degree (issue 13)"),
+    ("rigid", "Right-hand-side cost: rigid root + 3 wheels + 4 tethers against the point-mass hub (issue 10)"),
 )
 
 

@@ -38,7 +38,10 @@ from ..kernel.layout import (
     H_LEN,
     H_NRODS,
     H_NSTATE,
+    H_NRIGID,
+    H_NROOT,
     H_NTETH,
+    H_OFF_BODY,
     H_OFF_ROD,
     H_OFF_TETH,
     H_ROOT_INV_M,
@@ -51,7 +54,10 @@ from ..kernel.layout import (
     RT_LU,
     RT_M,
     RT_SIZE,
+    BT_NCHILD,
+    BT_SIZE,
     TT_MODEL,
+    TT_PARENT,
     TT_NRODS,
     TT_ROD0,
     TT_SIZE,
@@ -81,6 +87,16 @@ def structure_supported(p, n_state, second_order):
                 f"2*(3 + 3*{nrods}) = {expect} (components the structured solver does not know)")
     if nrods < 1:
         return "no rods"
+    # The blocks below are those of a star: every tether hangs from body 0 (the only root) and ends
+    # on a point mass or a free end.  Trees and rigid bodies (issue 10) take the dense path until
+    # their blocks are eliminated here too (the same leaves-first order as chain.py).
+    if int(p[H_NROOT]) != 1 or int(p[H_NRIGID]) != 0:
+        return f"{int(p[H_NROOT])} root bodies and {int(p[H_NRIGID])} rigid bodies (the structured blocks are a star's)"
+    offt = int(p[H_OFF_TETH])
+    offb = int(p[H_OFF_BODY])
+    for k in range(int(p[H_NTETH])):
+        if int(p[offt + k * TT_SIZE + TT_PARENT]) != 0 or int(p[offb + (1 + k) * BT_SIZE + BT_NCHILD]) != 0:
+            return "a tree of tethers (the structured blocks are a star's)"
     return ""
 
 
