@@ -20,9 +20,12 @@ def test_every_gate_has_quantity_threshold_unit_source():
     gates = _gates()
     assert len(gates) >= 10
     for gid, g in gates.items():
-        assert set(g) == {"quantity", "threshold", "unit", "source"}, gid
+        # budget: the error budget or the stated reason behind the threshold (issue 14)
+        assert {"quantity", "threshold", "unit", "source", "budget"} <= set(g) <= {
+            "quantity", "threshold", "unit", "source", "budget", "kind"}, gid
         assert isinstance(g["threshold"], (int, float)) and math.isfinite(g["threshold"]) and g["threshold"] >= 0, gid
-        assert g["quantity"].strip() and g["source"].strip() and g["unit"].strip(), gid
+        assert g["quantity"].strip() and g["source"].strip() and g["unit"].strip() and g["budget"].strip(), gid
+        assert g.get("kind", "measurement") in ("measurement", "data check"), gid
 
 
 def test_every_gate_is_measured_by_verify():

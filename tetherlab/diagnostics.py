@@ -26,7 +26,9 @@ from .kernel.layout import (
     H_OFF_ROD,
     H_OFF_SCR,
     H_OFF_TETH,
+    H_MUTANT,
     H_ROOT_M,
+    MUT_NO_ELASTIC_E,
     RT_EA,
     RT_LU,
     RT_M,
@@ -68,6 +70,7 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc):
     nq = int(p[H_NQ])
     jscr = scr + nrods * SR_SIZE
     m0 = p[H_ROOT_M]
+    elastic = p[H_MUTANT] != MUT_NO_ELASTIC_E  # always true but in tetherlab.mutants' control
     for row in range(nrows):
         t = ts[row]
         q = Y[row, :h]
@@ -126,7 +129,7 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc):
                         p, t, ax + s * SQ3 * dx, ay + s * SQ3 * dy, az + s * SQ3 * dz
                     )
                 eps = p[scr + g * SR_SIZE + SR_EPS]
-                if eps > 0.0 or p[tb + TT_TENSION_ONLY] == 0.0:  # a slack rod stores nothing
+                if elastic and (eps > 0.0 or p[tb + TT_TENSION_ONLY] == 0.0):  # slack: stores nothing
                     ve += 0.5 * p[rb + RT_EA] * p[rb + RT_LU] * eps * eps
                 rods[row, g, 0] = eps
                 rods[row, g, 1] = p[scr + g * SR_SIZE + SR_FE]

@@ -31,6 +31,9 @@ H_FAIL_VAL = 18    # a value describing the failure (e.g. the strain)
 H_MIN_STRAIN = 19  # strain below which a rod counts as collapsed (FAIL_ROD_COLLAPSE)
 H_EV_STOP_R = 20   # stop when the root body's radius falls below this (m; 0 = no such stop)
 H_OFF_FORM = 21    # offset of the formulation's own parameters (DROMO: formulations/dromo.py); 0 = none
+H_MUTANT = 22      # deliberate defect for the verification's negative controls (MUT_*); 0 in every
+                   # user run: build_model writes 0 and no scene key reaches it; only
+                   # tetherlab.mutants sets it, on a copy of the block (docs/verification.md)
 H_SIZE = 24
 
 # -- formulation codes ---------------------------------------------------------------------------
@@ -42,6 +45,15 @@ FORM_DROMO_TIME = 3    # DROMO elements of the root body, time independent (any 
 MODEL_PAPER = 0    # published TMED equations (eq. 26 with the eq. 20 sign corrected)
 MODEL_ENERGY = 1   # energy-consistent variant (ideal joints, Lagrangian), docs/model.md
 MODEL_PRINTED = 2  # eq. 20 exactly as printed (wrong sign); for the evidence in docs/model.md only
+
+# -- deliberate defects (H_MUTANT), switched on only by tetherlab.mutants ---------------------------
+MUT_NONE = 0
+MUT_EQ19_DOUBLED = 1     # eq. 19 read with the corrected J_2: F_T* counted twice (chain.py)
+MUT_FTP_DROPPED = 2      # F_TP of eq. 13 left out of the d equation (chain.py)
+MUT_DAMPING_SIGN = 3     # T = EA eps - D eps' (chain.py)
+MUT_MOON_INDIRECT = 4    # the Stiefel Moon without its indirect term (kernel/effects.py)
+MUT_NO_ELASTIC_E = 5     # the elastic energy left out of the energy diagnostic (diagnostics.py)
+MUT_HOLD_1PC = 6         # the static solver's holding force 1 % off (statics.py)
 
 # -- failure codes (returned by the right-hand side, details in the header) ----------------------
 FAIL_NONE = 0

@@ -49,6 +49,7 @@ from ..kernel.layout import (
     H_FAIL_T,
     H_FAIL_VAL,
     H_MIN_STRAIN,
+    H_MUTANT,
     H_NQ,
     H_NRODS,
     H_NTETH,
@@ -60,6 +61,9 @@ from ..kernel.layout import (
     H_ROOT_M,
     MODEL_ENERGY,
     MODEL_PRINTED,
+    MUT_DAMPING_SIGN,
+    MUT_EQ19_DOUBLED,
+    MUT_FTP_DROPPED,
     RT_D,
     RT_EA,
     RT_LU,
@@ -144,6 +148,7 @@ def rod_forces(t, q, qd, p):
     offq = int(p[H_OFF_QUAD])
     nq = int(p[H_NQ])
     min_strain = p[H_MIN_STRAIN]
+    mutant = int(p[H_MUTANT])  # 0 in every user run (tetherlab/mutants.py: negative controls)
     for k in range(nteth):
         tb = offt + k * TT_SIZE
         n = int(p[tb + TT_NRODS])
@@ -165,6 +170,8 @@ def rod_forces(t, q, qd, p):
             lu = p[rb + RT_LU]
             ea = p[rb + RT_EA]
             damp = p[rb + RT_D]
+            if mutant == MUT_DAMPING_SIGN:
+                damp = -damp
             dx = q[3 + 3 * g]
             dy = q[4 + 3 * g]
             dz = q[5 + 3 * g]
@@ -245,9 +252,16 @@ def rod_forces(t, q, qd, p):
                 if printed:
                     c1 = 2.0 - SQ3
                     c2 = SQ3 - 1.0
+                elif mutant == MUT_EQ19_DOUBLED:  # J_2 + (sqrt3 - 1) J(u): F_T* twice (model.md 2.4)
+                    c1 = 2.0 * SQ3 - 1.0
+                    c2 = 2.0 - 2.0 * SQ3
                 else:
                     c1 = SQ3
                     c2 = 1.0 - SQ3
+                if mutant == MUT_FTP_DROPPED:  # (R_2 - R_1) + 2 F_TP without F_TP (model.md 3)
+                    qlx = r2x - r1x
+                    qly = r2y - r1y
+                    qlz = r2z - r1z
                 ax_ = (r2x - r1x) * ux + (r2y - r1y) * uy + (r2z - r1z) * uz
                 ql_u = qlx * ux + qly * uy + qlz * uz
                 qx = ax_ * ux + (qlx - ql_u * ux) - 2.0 * fe * ux
