@@ -121,6 +121,12 @@ class Document:
     footer: str
     matrix_md: str
 
+    def _evidence(self, gid: str) -> str:
+        """A link to the section with the gate's table and figure (plain text if not in this run)."""
+        sec = self.gate_section(gid)
+        present = set(self.sections) | {f"study-{s[0]}" for s in self.studies} | {"controls", "gates"}
+        return f"[{sec}](#{sec})" if sec in present else f"{sec} (not run)"
+
     def markdown(self) -> str:
         from . import mutants
 
@@ -161,16 +167,15 @@ class Document:
                "| gate | value | threshold | unit | result | evidence |", "|---|---|---|---|---|---|"]
         for r in self.gate_rows:
             gid = r["gate"]
-            sec = self.gate_section(gid)
             md.append(f"| [{gid}](#gate-{gid}) | {_fmt(r['value'])} | {_fmt(r['threshold'])} | {_cell(r['unit'])} | "
-                      f"{_RESULT.get(r['result'], r['result'])} | [{sec}](#{sec}) |")  # fmt: skip
+                      f"{_RESULT.get(r['result'], r['result'])} | {self._evidence(gid)} |")  # fmt: skip
         md += ["", "### Definitions, sources and error budgets", ""]
         for gid, g in self.gates.items():
             kind = f" ({g['kind']})" if g.get("kind") else ""
             md += [f'<details id="gate-{gid}"><summary><code>{gid}</code>{kind}: {html.escape(g["quantity"])}</summary>', "",
                    f"**Threshold:** {_fmt(g['threshold'])} {g['unit']}  ", f"**Source:** {g['source']}  ",
                    f"**Error budget / reason:** {g.get('budget', '(none stated)')}  ",
-                   f"**Evidence:** [{self.gate_section(gid)}](#{self.gate_section(gid)})", "", "</details>", ""]
+                   f"**Evidence:** {self._evidence(gid)}", "", "</details>", ""]
 
         # -- negative controls
         md += ['<h2 id="controls">Negative controls (mutation matrix)</h2>', ""]
