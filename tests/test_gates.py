@@ -42,3 +42,17 @@ def test_every_gate_is_measured_by_verify():
                     produced.add(tgt.slice.value)
     missing = set(_gates()) - produced
     assert not missing, f"gates that make verify never measures: {sorted(missing)}"
+
+
+def test_every_gate_has_a_probe_or_a_reason_to_have_none():
+    # The negative controls (make verify) run each deliberate defect against the probes of
+    # tetherlab.verify.PROBES; a gate outside every probe must say in TOOTHLESS why it has no teeth
+    # (issue 14), or the mutation_toothless_unexplained gate fails at verify time.
+    from tetherlab import verify
+
+    probed = {g for gs in verify._PROBE_GATES.values() for g in gs}
+    assert {p[0] for p in verify.PROBES} == set(verify._PROBE_GATES)
+    gates = set(_gates())
+    assert not (set(verify.TOOTHLESS) - gates), "reasons for gates that do not exist"
+    assert not (gates - probed - set(verify.TOOTHLESS) - {"hard_cases_negative_control"}), \
+        "gates neither probed nor explained"  # the hard-cases control runs eq. 20 inside its study
