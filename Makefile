@@ -24,6 +24,7 @@ test-all: $(STAMP)
 # Reproduce every report into reports/; exits non-zero when a gate fails.
 verify: $(STAMP)
 	$(PY) -m tetherlab.verify --out reports
+	$(PY) -m pytest -q -p no:cacheprovider tests/test_report.py   # the page in a headless browser (skipped without Chromium)
 
 # Speed and memory targets: prints a table (never asserted in tests).
 bench: $(STAMP)

@@ -20,9 +20,12 @@ def test_every_gate_has_quantity_threshold_unit_source():
     gates = _gates()
     assert len(gates) >= 10
     for gid, g in gates.items():
-        assert set(g) == {"quantity", "threshold", "unit", "source"}, gid
+        # budget: the error budget or the stated reason behind the threshold (issue 14)
+        assert {"quantity", "threshold", "unit", "source", "budget"} <= set(g) <= {
+            "quantity", "threshold", "unit", "source", "budget", "kind"}, gid
         assert isinstance(g["threshold"], (int, float)) and math.isfinite(g["threshold"]) and g["threshold"] >= 0, gid
-        assert g["quantity"].strip() and g["source"].strip() and g["unit"].strip(), gid
+        assert g["quantity"].strip() and g["source"].strip() and g["unit"].strip() and g["budget"].strip(), gid
+        assert g.get("kind", "measurement") in ("measurement", "data check"), gid
 
 
 def test_every_gate_is_measured_by_verify():
@@ -39,3 +42,17 @@ def test_every_gate_is_measured_by_verify():
                     produced.add(tgt.slice.value)
     missing = set(_gates()) - produced
     assert not missing, f"gates that make verify never measures: {sorted(missing)}"
+
+
+def test_every_gate_has_a_probe_or_a_reason_to_have_none():
+    # The negative controls (make verify) run each deliberate defect against the probes of
+    # tetherlab.verify.PROBES; a gate outside every probe must say in TOOTHLESS why it has no teeth
+    # (issue 14), or the mutation_toothless_unexplained gate fails at verify time.
+    from tetherlab import verify
+
+    probed = {g for gs in verify._PROBE_GATES.values() for g in gs}
+    assert {p[0] for p in verify.PROBES} == set(verify._PROBE_GATES)
+    gates = set(_gates())
+    assert not (set(verify.TOOTHLESS) - gates), "reasons for gates that do not exist"
+    assert not (gates - probed - set(verify.TOOTHLESS) - {"hard_cases_negative_control"}), \
+        "gates neither probed nor explained"  # the hard-cases control runs eq. 20 inside its study

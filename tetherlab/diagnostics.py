@@ -48,6 +48,8 @@ from .kernel.layout import (
     H_OFF_TETH,
     H_OFF_WHL,
     H_OFF_WT,
+    H_MUTANT,
+    MUT_NO_ELASTIC_E,
     RT_EA,
     RT_LU,
     RT_M,
@@ -108,6 +110,7 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc, datt, ctrl, wheels):
     nq = int(p[H_NQ])
     jscr = scr + nrods * SR_SIZE
     mu_gg = p[H_MU_GG]
+    elastic = p[H_MUTANT] != MUT_NO_ELASTIC_E  # always true but in tetherlab.mutants' control
     for row in range(nrows):
         t = ts[row]
         q = Y[row, :h]
@@ -218,7 +221,7 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc, datt, ctrl, wheels):
                         p, t, ax + s * SQ3 * dx, ay + s * SQ3 * dy, az + s * SQ3 * dz
                     )
                 eps = p[scr + g * SR_SIZE + SR_EPS]
-                if eps > 0.0 or p[tb + TT_TENSION_ONLY] == 0.0:  # a slack rod stores nothing
+                if elastic and (eps > 0.0 or p[tb + TT_TENSION_ONLY] == 0.0):  # slack: stores nothing
                     ve += 0.5 * p[rb + RT_EA] * p[rb + RT_LU] * eps * eps
                 rods[row, g, 0] = eps
                 rods[row, g, 1] = p[scr + g * SR_SIZE + SR_FE]

@@ -98,7 +98,7 @@ def fit_block(
     position: Callable[[np.ndarray], np.ndarray],
     duration_s: float,
     segment_s: float = SEGMENT_S,
-    degree: int = DEGREE,
+    degree: int | None = None,
 ) -> tuple[list[float], float]:
     """Chebyshev coefficients of ``position`` on [0, duration_s] plus one spare segment.
 
@@ -106,6 +106,8 @@ def fit_block(
     distance between fit and ``position`` over ``_CHECK_PER_SEGMENT`` points per segment that are
     not fit nodes.  The spare segment covers an integrator that evaluates slightly past the end.
     """
+    if degree is None:  # read at call time (tetherlab.mutants lowers it for a negative control)
+        degree = DEGREE
     if not (duration_s > 0 and math.isfinite(duration_s)):
         raise ValueError(f"duration_s must be a finite time > 0 s, got {duration_s!r}")
     nseg = int(math.ceil(duration_s / segment_s)) + 1

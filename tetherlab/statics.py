@@ -230,6 +230,9 @@ def solve(
             f"(force residual {force_res:.3g} N, tolerance {tol:.3g} N)"
         )
     evaluate(x)  # leaves the reactions of the solution in the scratch area of p
+    hold = p[slot : slot + 3].copy()
+    if p[L.H_MUTANT] == L.MUT_HOLD_1PC:  # tetherlab.mutants' negative control only, never a user's
+        hold *= 1.01
     nr = model.n_rods
     scr = int(p[L.H_OFF_SCR])
     jscr = scr + nr * L.SR_SIZE
@@ -243,7 +246,7 @@ def solve(
         y=y,
         joints_m=joints,
         centres_m=joints[:-1] + SQ3 * d,
-        holding_force_N=p[slot : slot + 3].copy(),
+        holding_force_N=hold,
         joint_reactions_N=reactions,
         axial_force_N=fe,
         strain=eps,

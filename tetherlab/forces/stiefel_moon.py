@@ -53,12 +53,14 @@ SPEC = register(
         # the potential below depends on t, so energy is not an invariant: kept out of the energy
         # diagnostics (as forces/third_body.py does for the DE421 bodies); used by the tests
         conservative=False,
-        pack=lambda params, central, ctx: [params["mu"], params["orbit_radius"], params["rate"]],
+        # the fourth value multiplies the indirect term: always 1 here (no scene key reaches it);
+        # tetherlab.mutants sets it to 0 for the verification's negative control only
+        pack=lambda params, central, ctx: [params["mu"], params["orbit_radius"], params["rate"], 1.0],
     )
 )
 
 # -- compiled kernels (SI floats only) -----------------------------------------------------------
-# Parameter block: [mu', rho, w].
+# Parameter block: [mu', rho, w, 1.0] (the last: the indirect term's factor, see pack).
 from .._jit import njit  # noqa: E402
 
 import math  # noqa: E402
@@ -74,15 +76,18 @@ def moon_position(rho, w, t):
 
 
 @njit(cache=True)
-def accel(mu, rho, w, t, x, y, z):
-    """Direct + indirect acceleration -mu' [(r - a)/|r - a|^3 + a/rho^3] (m/s^2)."""
+def accel(mu, rho, w, t, x, y, z, indirect=1.0):
+    """Direct + indirect acceleration -mu' [(r - a)/|r - a|^3 + a/rho^3] (m/s^2).
+
+    ``indirect`` multiplies the indirect term: 1 in every run (pack); 0 only as the deliberate
+    defect of tetherlab.mutants."""
     ax, ay, az = moon_position(rho, w, t)
     dx = x - ax
     dy = y - ay
     dz = z - az
     d2 = dx * dx + dy * dy + dz * dz
     kd = mu / (d2 * math.sqrt(d2))
-    ki = mu / (rho * rho * rho)
+    ki = indirect * mu / (rho * rho * rho)
     return -(kd * dx + ki * ax), -(kd * dy + ki * ay), -(kd * dz + ki * az)
 
 

@@ -65,7 +65,7 @@ def _body_force(p, t, body, x, y, z, vx, vy, vz, mass, central):
             ax, ay, az = zonal.accel_j2(p[par], p[par + 1], p[par + 2], x, y, z)
         elif code == stiefel_moon.CODE:
             p[cnt + code] += 1.0
-            ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
+            ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z, p[par + 3])
         else:
             p[cnt + code] += 1.0
             ax, ay, az = _other_body(p, code, par, t, body, x, y, z, vx, vy, vz, mass)
@@ -172,7 +172,7 @@ def _other_rod(p, code, par, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_x
         fy += ay
         fz += az
     elif code == stiefel_moon.CODE:
-        ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z)
+        ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z, p[par + 3])
         fx += mass_per_xi * ax
         fy += mass_per_xi * ay
         fz += mass_per_xi * az

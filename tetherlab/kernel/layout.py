@@ -47,15 +47,28 @@ H_OFF_WT = 30      # offset of the wheel table
 H_OFF_BSCR = 31    # offset of the body scratch (BS_SIZE per body), then tether scratch (TS_SIZE each),
                    # then wheel scratch (WS_SIZE each), then a 6x6 work area (72)
 H_MU_GG = 32       # mu of the central body for the gravity-gradient torque (0: no central_gravity)
-H_DEFECT = 33      # DEFECT_*: a deliberate defect for negative controls only (never set by a scene)
+H_DEFECT = 33      # MUT_* / DEFECT_*: a deliberate defect for the verification's negative controls;
+                   # 0 in every user run: build_model writes 0 and no scene key reaches it; only
+                   # tetherlab.mutants and the rigid-body tests set it, on a copy of the block
+                   # (docs/verification.md)
+H_MUTANT = H_DEFECT  # the name tetherlab.mutants uses
 H_NROOT = 34       # number of root bodies
 H_OFF_ROOTS = 35   # offset of the root list (NROOT body indices)
 H_SIZE = 40
 
-# -- deliberate defects (negative controls of tests/test_rigid.py only; like MODEL_PRINTED) -------
-DEFECT_NONE = 0
-DEFECT_UNROTATED_ATTACHMENT = 1  # the attachment vector used in body axes as if inertial
-DEFECT_NO_CENTRIPETAL = 2        # omega x (omega x rho) dropped from the attachment acceleration
+# -- deliberate defects: one registry of codes (tetherlab/mutants.py; like MODEL_PRINTED) -----------
+MUT_NONE = 0
+MUT_EQ19_DOUBLED = 1     # eq. 19 read with the corrected J_2: F_T* counted twice (chain.py)
+MUT_FTP_DROPPED = 2      # F_TP of eq. 13 left out of the d equation (chain.py)
+MUT_DAMPING_SIGN = 3     # T = EA eps - D eps' (chain.py)
+MUT_MOON_INDIRECT = 4    # the Stiefel Moon without its indirect term (kernel/effects.py)
+MUT_NO_ELASTIC_E = 5     # the elastic energy left out of the energy diagnostic (diagnostics.py)
+MUT_HOLD_1PC = 6         # the static solver's holding force 1 % off (statics.py)
+DEFECT_NONE = MUT_NONE
+DEFECT_UNROTATED_ATTACHMENT = 21  # the attachment vector used in body axes as if inertial (chain.py)
+DEFECT_NO_CENTRIPETAL = 22        # omega x (omega x rho) dropped from the attachment acceleration
+MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
+MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 
 # -- formulation codes ---------------------------------------------------------------------------
 FORM_COWELL = 1

@@ -88,6 +88,7 @@ from ..kernel.layout import (
     H_FAIL_T,
     H_FAIL_VAL,
     H_MIN_STRAIN,
+    H_MUTANT,
     H_MU_GG,
     H_NBODY,
     H_NQ,
@@ -108,6 +109,9 @@ from ..kernel.layout import (
     H_OFF_WT,
     MODEL_ENERGY,
     MODEL_PRINTED,
+    MUT_DAMPING_SIGN,
+    MUT_EQ19_DOUBLED,
+    MUT_FTP_DROPPED,
     RT_D,
     RT_EA,
     RT_LU,
@@ -272,6 +276,9 @@ def _rod_force(t, q, qd, p, g, tension_only, energy, printed, ax, ay, az, avx, a
     lu = p[rb + RT_LU]
     ea = p[rb + RT_EA]
     damp = p[rb + RT_D]
+    mutant = int(p[H_MUTANT])  # 0 in every user run (tetherlab/mutants.py: negative controls)
+    if mutant == MUT_DAMPING_SIGN:
+        damp = -damp
     dx = q[3 + 3 * g]
     dy = q[4 + 3 * g]
     dz = q[5 + 3 * g]
@@ -352,9 +359,16 @@ def _rod_force(t, q, qd, p, g, tension_only, energy, printed, ax, ay, az, avx, a
         if printed:
             c1 = 2.0 - SQ3
             c2 = SQ3 - 1.0
+        elif mutant == MUT_EQ19_DOUBLED:  # J_2 + (sqrt3 - 1) J(u): F_T* twice (model.md 2.4)
+            c1 = 2.0 * SQ3 - 1.0
+            c2 = 2.0 - 2.0 * SQ3
         else:
             c1 = SQ3
             c2 = 1.0 - SQ3
+        if mutant == MUT_FTP_DROPPED:  # (R_2 - R_1) + 2 F_TP without F_TP (model.md 3)
+            qlx = r2x - r1x
+            qly = r2y - r1y
+            qlz = r2z - r1z
         ax_ = (r2x - r1x) * ux + (r2y - r1y) * uy + (r2z - r1z) * uz
         ql_u = qlx * ux + qly * uy + qlz * uz
         qx = ax_ * ux + (qlx - ql_u * ux) - 2.0 * fe * ux

@@ -1,0 +1,121 @@
+"""The deliberate defects of tetherlab/mutants.py (negative controls of the gates, issue 14).
+
+What is checked here, fast: no user run can carry a defect (the switch is 0 / 1 as built from any
+shipped scene), switching one on and off leaves nothing behind, and the cheapest defect/gate pairs
+of tetherlab.verify.FAST_PAIRS are caught by the gate's own measurement while the same measurement
+passes without the defect.  The whole matrix is `make verify`'s (report section "Negative
+controls").  Thresholds come from references/gates.toml (each with its budget there).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from tetherlab import mutants, verify
+from tetherlab.forces import stiefel_moon
+from tetherlab.kernel import layout as L
+from tetherlab.pipeline import prepare
+from tetherlab.scene import load_scene
+from tetherlab.system import Model
+
+ROOT = Path(__file__).resolve().parent.parent
+GATES = tomllib.loads((ROOT / "references" / "gates.toml").read_text())
+
+
+@pytest.mark.parametrize("scene", sorted(p.name for p in (ROOT / "studies" / "scenes").glob("*.toml")
+                                         if p.name != "rigid-example.toml"))
+def test_no_shipped_scene_reaches_a_defect(scene):
+    try:
+        sc = load_scene(ROOT / "studies" / "scenes" / scene)
+    except Exception as exc:  # a scene this branch cannot load is another test's business
+        pytest.skip(f"{scene}: {exc}")
+    p = prepare(sc).model.fresh_params()
+    assert p[L.H_MUTANT] == L.MUT_NONE
+    offt = int(p[L.H_OFF_TETH])
+    for k in range(int(p[L.H_NTETH])):
+        assert int(p[offt + k * L.TT_SIZE + L.TT_MODEL]) in (L.MODEL_PAPER, L.MODEL_ENERGY)
+    off = int(p[L.H_OFF_EFF])
+    for e in range(int(p[L.H_NEFF])):
+        if int(p[off + e * L.ET_SIZE + L.ET_CODE]) == stiefel_moon.CODE:
+            assert p[int(p[off + e * L.ET_SIZE + L.ET_OFF_PAR]) + 3] == 1.0  # the indirect term's factor
+
+
+def test_switching_a_defect_on_and_off_leaves_nothing_behind():
+    original = Model.fresh_params
+    model = prepare(load_scene(ROOT / "studies" / "scenes" / "lateral-two-rods.toml")).model
+    before = model.fresh_params()
+    for name in mutants.names():
+        with mutants.active(name) as m:
+            assert m.name == name
+            after = model.fresh_params()
+            if m.mutate is not None and m.path in ("tether", "diagnostics", "statics"):
+                assert (after != before).any(), name  # the copy carries the defect ...
+        assert (model.p == before).all(), name  # ... the model's own block never does
+    assert Model.fresh_params is original
+    assert (model.fresh_params() == before).all()
+
+
+def test_every_active_defect_names_gates_that_exist_and_rigid_slots_wait():
+    for m in mutants.MUTANTS.values():
+        assert set(m.gates) <= set(GATES), m.name
+        if m.status == "active":
+            assert m.gates and (m.mutate or m.patch), m.name
+    pending = mutants.names("pending")
+    assert {"rigid_attachment_not_rotated", "rigid_centripetal_dropped"} <= set(pending)
+    with pytest.raises(ValueError, match="has not landed"):
+        with mutants.active(pending[0]):
+            pass
+
+
+def _gate(values, gid):
+    return values[gid], GATES[gid]["threshold"]
+
+
+def test_holding_force_off_by_one_percent_fails_the_catenary_tension_gate():
+    # catenary_tension_n64: errors against Irvine in units of their Richardson estimate (gates.toml)
+    v, thr = _gate(verify.check_catenary_probe([]), "catenary_tension_n64")
+    assert v <= thr
+    with mutants.active("statics_holding_force_1pc"):
+        v_bad, _ = _gate(verify.check_catenary_probe([]), "catenary_tension_n64")
+    assert v_bad > thr
+
+
+def test_energy_without_elastic_term_fails_the_energy_gate():
+    # energy_model_energy: max|dE| / max V_e of the energy model in free space (gates.toml budget)
+    thr = GATES["energy_model_energy"]["threshold"]
+    assert verify._energy_free_space([], quick=True) <= thr
+    with mutants.active("energy_without_elastic_term"):
+        bad = verify._energy_free_space([], quick=True)
+    assert not (bad <= thr)  # inf (no elastic energy to divide by) or far above
+
+
+def test_de421_low_degree_fails_the_fit_gate():
+    v, thr = _gate(verify.check_de421([]), "de421_fit_error")
+    assert v <= thr
+    with mutants.active("de421_low_degree"):
+        v_bad, _ = _gate(verify.check_de421([]), "de421_fit_error")
+    assert v_bad > thr
+
+
+def test_j2_sign_fails_the_heyoka_orbit_gate():
+    v, thr = _gate(verify.check_heyoka_orbits([]), "heyoka_orbits_position")
+    assert v <= thr
+    with mutants.active("j2_sign"):
+        v_bad, _ = _gate(verify.check_heyoka_orbits([]), "heyoka_orbits_position")
+    assert v_bad > 1e3 * thr and math.isfinite(v_bad)  # J2's along-track drift in 1 day: kilometres
+
+
+def test_the_harness_fills_the_matrix_for_a_fast_pair():
+    rows = []
+    cells, baseline = verify.run_negative_controls(rows, GATES, names=["de421_low_degree"], probes=["de421"])
+    assert cells[("de421_low_degree", "de421_fit_error")][1] == "caught"
+    assert baseline["de421_fit_error"] <= GATES["de421_fit_error"]["threshold"]
+    by_defect, by_gate, vals = verify.mutation_summary(cells, GATES, {})
+    assert by_defect["de421_low_degree"] == ["de421_fit_error"]
+    # the other defects were not run here, so they count as uncaught
+    assert vals["mutation_uncaught_defects"] == len(mutants.names()) - 1
+    assert "de421_fit_error" in verify.matrix_md(cells, GATES, by_defect, by_gate)

@@ -1,0 +1,332 @@
+"""Deliberate defects for the verification's negative controls (mutation testing of the gates).
+
+A gate that cannot fail proves nothing.  Each entry of :data:`MUTANTS` is one realistic defect of
+the simulator -- a misprint of the paper copied into the code, a dropped term, a typo in a
+coefficient -- that ``make verify`` switches on, one at a time, and runs against the gates it
+concerns (``tetherlab.verify``, section "Negative controls").  The report's matrix says which gate
+caught which defect; the mutation score (defects no gate caught) is itself a gate.
+
+How a defect is switched on, and why it can never reach a user's run:
+
+* ``param`` defects live in the compiled kernels as one branch on the header slot
+  ``p[H_MUTANT]`` of the parameter block (or on a value the effect's ``pack`` always writes as 1,
+  or on the tether-model code), which :func:`tetherlab.system.build_model` writes as 0 and no
+  scene key reaches.  :func:`active` patches ``Model.fresh_params`` -- the one place every run,
+  diagnostic and static solve takes its copy of the block from -- so the copy carries the
+  defect; the model's own block is untouched.  The flag is read at run time, so the kernels'
+  on-disk cache is the normal one: a defect never compiles into it.
+* ``patch`` defects are in pure Python (the DE421 fit degree) or recompile a private, uncached
+  copy of a kernel (DOP853's error coefficient), installed for the duration of :func:`active`
+  only.
+
+The defects of the rigid-body issue (attachment vector not rotated, omega x (omega x r) dropped)
+have their slots below, ``status = "pending"``, filled when branch ``rigid`` lands.
+
+Use (verification only)::
+
+    with mutants.active("ftp_dropped"):
+        value = some_gate_measurement()
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import types
+from dataclasses import dataclass, field
+from typing import Callable
+
+
+from .kernel import layout as L
+
+
+@dataclass(frozen=True)
+class Mutant:
+    name: str
+    defect: str  # what is wrong, in the words of the paper / the code
+    where: str  # the code that carries the switch
+    source: str  # what the correct version rests on
+    gates: tuple  # gates expected to catch it (the harness runs these, plus the cheap others)
+    path: str = ""  # the code path it sits on: verify runs the probes that exercise that path
+    mutate: Callable | None = None  # param defects: p -> None, edits the copy in place
+    patch: Callable | None = None  # patch defects: a context manager factory
+    status: str = "active"  # "pending": slot for a defect whose code has not landed
+    skip: dict = field(default_factory=dict)  # probe -> why it is not run under this defect
+
+
+# -- param defects: edits of the copy of the parameter block -------------------------------------
+def _tethers(p):
+    offt = int(p[L.H_OFF_TETH])
+    return [offt + k * L.TT_SIZE for k in range(int(p[L.H_NTETH]))]
+
+
+def _effects(p, codes):
+    off = int(p[L.H_OFF_EFF])
+    for e in range(int(p[L.H_NEFF])):
+        base = off + e * L.ET_SIZE
+        if int(p[base + L.ET_CODE]) in codes:
+            yield int(p[base + L.ET_OFF_PAR])
+
+
+def _printed(p):
+    for tb in _tethers(p):  # eq. 20 enters the paper model only (the energy model has no J_2)
+        if int(p[tb + L.TT_MODEL]) == L.MODEL_PAPER:
+            p[tb + L.TT_MODEL] = L.MODEL_PRINTED
+
+
+def _flag(code):
+    def mutate(p):
+        p[L.H_MUTANT] = code
+
+    return mutate
+
+
+def _one_node(p):
+    # the quadrature table [nodes (2 nq), weights (2 nq)] rewritten for nq = 1: xi = -1/2, +1/2
+    from .system import gauss_legendre_halves
+
+    nodes, weights = gauss_legendre_halves(1)
+    off = int(p[L.H_OFF_QUAD])
+    p[L.H_NQ] = 1
+    p[off : off + 2] = nodes
+    p[off + 2 : off + 4] = weights
+
+
+def _j2_sign(p):
+    from .forces import zonal
+
+    for par in _effects(p, (zonal.CODE_J2, zonal.CODE_ZONAL)):
+        p[par + 2] = -p[par + 2]  # J2 = +sqrt5 C20bar instead of -sqrt5 C20bar (forces/zonal.py)
+
+
+def _moon_indirect(p):
+    from .forces import stiefel_moon
+
+    for par in _effects(p, (stiefel_moon.CODE,)):
+        p[par + 3] = 0.0  # the factor of the indirect term a/rho^3 (forces/stiefel_moon.py)
+
+
+# -- patch defects ---------------------------------------------------------------------------------
+@contextlib.contextmanager
+def _de421_degree():
+    from . import ephemeris
+
+    old = ephemeris.DEGREE
+    ephemeris.DEGREE = 5
+    try:
+        yield
+    finally:
+        ephemeris.DEGREE = old
+
+
+_DOP_CACHE: dict = {}
+#: relative change of DOP853's first 5th-order error coefficient (a typo in its 8th digit)
+DOP_E5_CHANGE = 1e-7
+
+
+def _dop853_kernel():
+    """erk_core recompiled (uncached, private) with E5[0] of DOP853 changed by DOP_E5_CHANGE."""
+    if "core" in _DOP_CACHE:
+        return _DOP_CACHE["core"]
+    import numba
+
+    from .integrators import dop853, erk
+
+    def copy(fn, g):
+        f = fn.py_func
+        return types.FunctionType(f.__code__, g, f.__name__, f.__defaults__, f.__closure__)
+
+    e5 = dop853._E5.copy()
+    e5[0] *= 1.0 + DOP_E5_CHANGE
+    g_dop = dict(vars(dop853))
+    g_dop["_E5"] = e5
+    g_erk = dict(vars(erk))
+    g_erk["_dop_error"] = numba.njit(cache=False)(copy(dop853._dop_error, g_dop))
+    g_erk["_solution"] = numba.njit(cache=False)(copy(erk._solution, g_erk))
+    core = numba.njit(cache=False)(copy(erk.erk_core, g_erk))
+    g_erk["erk_core"] = core
+    _DOP_CACHE["core"] = core
+    return core
+
+
+@contextlib.contextmanager
+def _dop853_e5():
+    from .formulations import dromo
+    from .integrators import driver
+
+    core = _dop853_kernel()
+    old = driver.erk_core, dromo.erk_core
+    driver.erk_core = core
+    dromo.erk_core = core
+    try:
+        yield
+    finally:
+        driver.erk_core, dromo.erk_core = old
+
+
+MUTANTS = {
+    m.name: m
+    for m in (
+        Mutant(
+            "eq20_printed_sign",
+            "eq. 20 as printed: J_2 = I - (sqrt3 - 1) J(u) (transverse coefficient 2 - sqrt3)",
+            "tether/chain.py rod_forces (tether model code MODEL_PRINTED)",
+            "docs/model.md 2.4 (misprint 1): the moment equation eq. 10 needs sqrt3",
+            ("angular_momentum_internal", "lateral_mode_two_rods", "hard_cases_negative_control"),
+            mutate=_printed,
+            path="tether",
+        ),
+        Mutant(
+            "eq19_doubled_ft_star",
+            "eq. 19 read with the corrected J_2: 2 F_T* and J_2 (T_B - T_A) both kept (F_T* twice)",
+            "tether/chain.py rod_forces (p[H_MUTANT] = MUT_EQ19_DOUBLED)",
+            "docs/model.md 2.4 (misprint 2): reaction moment (2 sqrt3 - 1)/sqrt3 of eq. 10",
+            ("angular_momentum_internal", "lateral_mode_two_rods"),
+            mutate=_flag(L.MUT_EQ19_DOUBLED),
+            path="tether",
+        ),
+        Mutant(
+            "ftp_dropped",
+            "F_TP of eq. 13 dropped from the d equation: (R_2 - R_1) in place of u u^T (R_2 - R_1) + J(u) Q_lag",
+            "tether/chain.py rod_forces (p[H_MUTANT] = MUT_FTP_DROPPED)",
+            "paper eqs. 11-13, 26; docs/model.md 3 (F_TP in closed form)",
+            ("libration_inplane_frequency", "libration_outofplane_frequency"),
+            mutate=_flag(L.MUT_FTP_DROPPED),
+            path="tether",
+        ),
+        Mutant(
+            "one_node_per_half_rod",
+            "one Gauss-Legendre node per half rod (xi = -1/2, +1/2) for the distributed forces",
+            "the quadrature table of the parameter block (H_NQ), as built by system.build_model",
+            "docs/model.md 3 (quadrature): 2 nodes a half are exact for the linear gravity gradient's moment",
+            ("libration_inplane_frequency", "libration_outofplane_frequency"),
+            mutate=_one_node,
+            path="tether",
+        ),
+        Mutant(
+            "j2_sign",
+            "J2 with the wrong sign (J2 = +sqrt5 C20bar), in acceleration and potential alike",
+            "the j2 / zonal effect's packed coefficient (forces/zonal.py)",
+            "EGM2008 (Pavlis et al. 2012): J_n = -sqrt(2n+1) C_n0bar; references/heyoka_orbits",
+            ("heyoka_orbits_position", "stiefel_cowell_best_error"),
+            mutate=_j2_sign,
+            path="gravity",
+        ),
+        Mutant(
+            "moon_indirect_dropped",
+            "the Stiefel Moon without its indirect term -mu' a/rho^3 (the Moon's pull on the Earth)",
+            "forces/stiefel_moon.py accel (the packed factor of the indirect term, always 1)",
+            "Stiefel & Scheifele 1971 sect. 23; docs/dromo.md 6; references/stiefel",
+            ("stiefel_cowell_best_error",),
+            mutate=_moon_indirect,
+            path="moon",
+        ),
+        Mutant(
+            "de421_low_degree",
+            "DE421 positions fitted by Chebyshev polynomials of degree 5 (not 14) on 4-day segments",
+            "ephemeris.DEGREE (read by fit_block at call time)",
+            "ephemeris.py: DE421 stores the Moon in 4-day segments of degree 12",
+            ("de421_fit_error",),
+            patch=_de421_degree,
+            path="de421",
+        ),
+        Mutant(
+            "dop853_error_coefficient",
+            f"DOP853's error coefficient E5[0] changed by a relative {DOP_E5_CHANGE:g} (the estimator's "
+            "coefficients no longer sum to 0: an O(h) term in the error estimate)",
+            "a private uncached recompile of integrators/erk.erk_core with the changed E5 (driver, DROMO)",
+            "Hairer, Norsett & Wanner, Solving ODEs I, II.10 (DOP853 coefficients); integrators/tableau.py",
+            ("dop853_work_exponent",),
+            patch=_dop853_e5,
+            path="integrator",
+            skip={"stiefel": "the O(h) term of the error estimate at rtol 1e-13 over 288 days needs ~1e8 steps "
+                             "(cost); the work-exponent gate sees it on a Kepler orbit in seconds"},
+        ),
+        Mutant(
+            "damping_sign",
+            "the damping term of eq. 1 with the wrong sign: T = EA eps - D eps'",
+            "tether/chain.py rod_forces (p[H_MUTANT] = MUT_DAMPING_SIGN)",
+            "paper eq. 1; docs/model.md 6.2 (the power balance: damping dissipates D L_u eps'^2)",
+            ("energy_model_power_balance",),
+            mutate=_flag(L.MUT_DAMPING_SIGN),
+            path="tether",
+        ),
+        Mutant(
+            "statics_holding_force_1pc",
+            "the static solver reports a holding force R_f 1 % too large",
+            "statics.py solve (p[H_MUTANT] = MUT_HOLD_1PC)",
+            "paper section 4.2; Irvine's elastic catenary (references/catenary)",
+            ("catenary_tension_n64",),
+            mutate=_flag(L.MUT_HOLD_1PC),
+            path="statics",
+        ),
+        Mutant(
+            "energy_without_elastic_term",
+            "the energy diagnostic without the rods' elastic energy (1/2) EA L_u eps^2",
+            "diagnostics.py evaluate_rows (p[H_MUTANT] = MUT_NO_ELASTIC_E)",
+            "docs/model.md 5: the energy model's Lagrangian includes the bar's elastic energy",
+            ("energy_model_energy",),
+            mutate=_flag(L.MUT_NO_ELASTIC_E),
+            path="diagnostics",
+        ),
+        # -- slots for the rigid-body defects of issue 10 (branch rigid): filled when it lands
+        Mutant(
+            "rigid_attachment_not_rotated",
+            "a tether's attachment vector on a rigid body used in body axes, not rotated to inertial",
+            "(pending: branch rigid, issue 10)",
+            "paper eqs. 44-49 (rigid central body)",
+            (),
+            status="pending",
+            path="rigid",
+        ),
+        Mutant(
+            "rigid_centripetal_dropped",
+            "omega x (omega x r) dropped from the attachment point's acceleration",
+            "(pending: branch rigid, issue 10)",
+            "paper eqs. 44-49 (rigid central body)",
+            (),
+            status="pending",
+            path="rigid",
+        ),
+    )
+}
+
+
+def names(status: str = "active") -> list[str]:
+    return [k for k, m in MUTANTS.items() if m.status == status]
+
+
+@contextlib.contextmanager
+def active(name: str | None):
+    """Switch defect ``name`` on for the body of the ``with`` (None: no defect, a plain run)."""
+    if name is None:
+        yield None
+        return
+    m = MUTANTS[name]
+    if m.status != "active":
+        raise ValueError(f"mutant {name!r}: status {m.status!r}, its code has not landed")
+    from .system import Model
+
+    with contextlib.ExitStack() as stack:
+        if m.mutate is not None:
+            original = Model.fresh_params
+
+            def fresh_params(self, _orig=original, _mut=m.mutate):
+                p = _orig(self)
+                _mut(p)
+                return p
+
+            Model.fresh_params = fresh_params
+            stack.callback(setattr, Model, "fresh_params", original)
+        if m.patch is not None:
+            stack.enter_context(m.patch())
+        yield m
+
+
+def caught(value, threshold) -> bool:
+    """A gate catches a defect when its measurement fails: over the threshold, not finite, or
+    the measurement itself refused to run (None)."""
+    return value is None or not (isinstance(value, (int, float)) and math.isfinite(value)) or value > threshold
+
+
+__all__ = ["MUTANTS", "Mutant", "active", "caught", "names"]
