@@ -151,8 +151,8 @@ def _dop853_kernel():
 
 @contextlib.contextmanager
 def _dop853_e5():
-    from .formulations import dromo
     from .integrators import driver
+    from .propagation import dromo  # DROMO's driving (the sigma-form clock) calls erk_core itself
 
     core = _dop853_kernel()
     old = driver.erk_core, dromo.erk_core
