@@ -18,7 +18,16 @@ from .forces import effect as effect_spec
 from .formulations.cowell import cowell_rhs
 
 from .kernel.events import event_components, system_events
-from .kernel.layout import FAIL_TEXT, H_EV_STOP_R, H_FAIL_CODE, H_FAIL_ROD, H_FAIL_T, H_FAIL_VAL
+from .kernel.layout import (
+    FAIL_TEXT,
+    H_EV_STOP_R,
+    H_FAIL_CODE,
+    H_FAIL_EFFECT,
+    H_FAIL_EFFECT_T,
+    H_FAIL_ROD,
+    H_FAIL_T,
+    H_FAIL_VAL,
+)
 from .orbits.kepler import elements_to_cartesian
 from .result import Result
 from .system import (
@@ -114,7 +123,12 @@ def _topology(scene):
     return root, tethers
 
 
-def prepare(scene) -> Prepared:
+def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
+    """Build the model and initial state.  First checks that the run fits the machine
+    (tetherlab/resources.py): all outputs in memory (``simulate``), or streamed to ``out_dir``."""
+    from .resources import check_scene
+
+    check_scene(scene, outputs_in_memory=outputs_in_memory, out_dir=out_dir)
     mu = scene.central_body.mu_m3_s2
     central = {"mu_m3_s2": mu, "radius_m": scene.central_body.radius_m}
     effects = [(effect_spec(e.name), e.params_si) for e in scene.effects]
@@ -490,17 +504,30 @@ def _relative_equilibrium(model, y0, r_ref, v_ref, omega, reference, root_name, 
     return build(x)[0]
 
 
+def _failing_effect(p: np.ndarray, code: int) -> str:
+    """' (from effect NAME)' when a named effect's force was non-finite in the failing
+    evaluation (kernel/effects.py records it), else ''."""
+    from .forces import EFFECTS
+
+    ecode = int(p[H_FAIL_EFFECT])
+    if ecode <= 0 or (code != 0 and p[H_FAIL_EFFECT_T] != p[H_FAIL_T]):
+        return ""
+    names = [name for name, spec in EFFECTS.items() if spec.code == ecode]
+    name = names[0] if names else f"code {ecode}"
+    return f" (the effect {name!r} returned a non-finite force at t = {p[H_FAIL_EFFECT_T]:.9g} s)"
+
+
 def failure_message(p: np.ndarray, model: Model, status: int, t_end: float, base: str) -> str:
     code = int(p[H_FAIL_CODE])
     if code == 0:
-        return base
+        return base + _failing_effect(p, 0)
     rod = int(p[H_FAIL_ROD])
     where = ""
     if rod >= 0:
         for k, sl in enumerate(model.rod_slices):
             if sl.start <= rod < sl.stop:
                 where = f" in tether {model.tethers[k].name!r}, rod {rod - sl.start + 1} of {sl.stop - sl.start}"
-    why = FAIL_TEXT.get(code, f"failure code {code}")
+    why = FAIL_TEXT.get(code, f"failure code {code}") + _failing_effect(p, code)
     detail = f" (strain {p[H_FAIL_VAL]:.6g})" if code == 11 else ""
     return (
         f"run stopped at t = {t_end:.9g} s: {why}{where}{detail}; "
@@ -524,8 +551,18 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     else:
         res = _integrate_cowell(prep, p, bar.update)
     bar.close()
+    stats, message = run_outcome(prep, res, p, time.perf_counter() - t_wall)
+    d = diag.compute(prep.model, res.t, res.y)
+    result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)
+    if res.status != 0 and raise_on_failure:
+        raise SimulationError(message, result)
+    return result
+
+
+def run_outcome(prep: Prepared, res, p: np.ndarray, total_wall_s: float) -> tuple[dict, str]:
+    """The run statistics and the message (when, where and why a failed run stopped)."""
     stats = dict(res.stats)
-    stats["total_wall_s"] = time.perf_counter() - t_wall
+    stats["total_wall_s"] = total_wall_s
     stats["formulation"] = prep.formulation
     stats["events"] = [
         {"t_s": float(te), "event": prep.event_names[k], "side": "taut" if side > 0 else "slack"}
@@ -536,11 +573,7 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     stopped = res.stopped_by
     stats["stopped_by"] = None if stopped is None else prep.event_names[stopped]
     message = res.message if res.status == 0 else failure_message(p, prep.model, res.status, res.t_end, res.message)
-    d = diag.compute(prep.model, res.t, res.y)
-    result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)
-    if res.status != 0 and raise_on_failure:
-        raise SimulationError(message, result)
-    return result
+    return stats, message
 
 
 def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
@@ -566,7 +599,8 @@ def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
     return res, pe
 
 
-def _integrate_cowell(prep: Prepared, p: np.ndarray, progress):
+def _integrate_cowell(prep: Prepared, p: np.ndarray, progress, **store):
+    """``store``: y_out, checkpoint, restart for runs written as they go (tetherlab/runstore.py)."""
     from .integrators.driver import integrate
 
     return integrate(
@@ -583,6 +617,7 @@ def _integrate_cowell(prep: Prepared, p: np.ndarray, progress):
         progress=progress,
         second_order=True,  # Cowell: y = [q, q'], so RADAU5 can halve its Newton systems
         **_event_args(prep),
+        **store,
     )
 
 

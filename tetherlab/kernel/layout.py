@@ -31,6 +31,8 @@ H_FAIL_VAL = 18    # a value describing the failure (e.g. the strain)
 H_MIN_STRAIN = 19  # strain below which a rod counts as collapsed (FAIL_ROD_COLLAPSE)
 H_EV_STOP_R = 20   # stop when the root body's radius falls below this (m; 0 = no such stop)
 H_OFF_FORM = 21    # offset of the formulation's own parameters (DROMO: formulations/dromo.py); 0 = none
+H_FAIL_EFFECT = 22    # code of the last effect whose force came out non-finite (0 = none): kernel/effects.py
+H_FAIL_EFFECT_T = 23  # time of that evaluation
 H_SIZE = 24
 
 # -- formulation codes ---------------------------------------------------------------------------
