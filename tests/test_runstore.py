@@ -22,6 +22,7 @@ import pandas as pd
 import pytest
 
 from tetherlab.cli import main
+from tetherlab.errors import SceneError
 from tetherlab.integrators import driver
 from tetherlab.pipeline import SimulationError, simulate
 from tetherlab.result import Result
@@ -143,6 +144,7 @@ def slow(*a, **k):
     return real(*a, **k)
 driver._call_kernel = slow
 from tetherlab.cli import main
+from tetherlab.errors import SceneError
 sys.exit(main(sys.argv[1:]))
 """
 
@@ -260,3 +262,51 @@ def test_an_effect_producing_nan_mid_run_is_named_with_its_time(tmp_path, monkey
     assert rec["state"] == "failed" and "'applied_force'" in rec["message"]
     ts, _ = _tables(tmp_path / "o")
     assert len(ts) == rec["rows_done"] and ts["t_s"].iloc[-1] > 0.25 * t_end
+
+
+# -- valid but huge requests -------------------------------------------------------------------
+# The machine's memory and free disk are fixed by monkeypatching, so the tests do not depend on
+# the machine they run on.  Sizes: the Cowell state of a tether of k rods has n = 6 (1 + k)
+# floats (root position, k rod vectors, and their velocities; docs/model.md), 8 bytes each.
+
+
+def _machine(monkeypatch, memory_gib: float, disk_gib: float = 1e6):
+    from tetherlab import resources
+
+    monkeypatch.setattr(resources, "available_memory_bytes", lambda: int(memory_gib * 2**30))
+    monkeypatch.setattr(resources, "free_disk_bytes", lambda path: int(disk_gib * 2**30))
+
+
+def test_huge_output_count_is_refused_naming_the_key(monkeypatch):
+    _machine(monkeypatch, 16.0)
+    calls = _interrupt_on_call(monkeypatch, 10**9)
+    scene = load_scene(SCENES / "libration-inplane.toml").replace(**{"output.count": 200_000_000})
+    # the output buffer alone: 2e8 rows x 18 floats x 8 B = 26.8 GiB > 16 GiB (issue 14's figure)
+    with pytest.raises(SceneError) as info:
+        simulate(scene, progress=False)
+    assert info.value.key == "output.count"
+    msg = str(info.value)
+    assert "GiB in memory" in msg and "16 GiB available" in msg and "200000000" in msg
+    assert calls[0] == 0
+
+
+def test_huge_rod_count_is_refused_naming_the_tether(monkeypatch):
+    _machine(monkeypatch, 4.0)
+    scene = load_scene(SCENES / "libration-inplane.toml").replace(**{"tethers.main.rods": 200_000})
+    # 1001 rows x 6 (1 + 2e5) floats x 8 B = 8.95 GiB of output buffer > 4 GiB (issue 14's figure)
+    with pytest.raises(SceneError) as info:
+        simulate(scene, progress=False)
+    assert info.value.key == "tethers.main.rods" and "rods = 200000" in str(info.value)
+
+
+def test_streamed_run_checks_the_disk_and_cli_reports_it(tmp_path, monkeypatch, capsys):
+    _machine(monkeypatch, 64.0, disk_gib=50.0)
+    calls = _interrupt_on_call(monkeypatch, 10**9)
+    f = tmp_path / "huge.toml"
+    f.write_text((SCENES / "libration-inplane.toml").read_text().replace("count = 1001", "count = 200000000"))
+    # streamed, the rows need no memory; on disk the states alone are 26.8 GiB and the 29 time-
+    # series columns another 2e8 x 29 x 8 B = 43.2 GiB: more than the 50 GiB free
+    assert main(["run", str(f), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "'output.count'" in err and "50 GiB free" in err and "Traceback" not in err
+    assert calls[0] == 0 and not (tmp_path / "o" / "states.npy").exists()
