@@ -385,7 +385,9 @@ def _initial_state(scene, model: Model, root_name: str, tethers, mu: float, eq_m
     else:
         raise SceneError("orbit", "an [orbit] block or an initial state on the root body", "neither")
     r_ref, v_ref = ref
-    omega = np.cross(r_ref, v_ref) / float(r_ref @ r_ref) if motion in ("corotating", "equilibrium") else None
+    # (a reference point at the centre has no orbit to corotate with: no rotation)
+    rr2 = float(r_ref @ r_ref)
+    omega = np.cross(r_ref, v_ref) / rr2 if motion in ("corotating", "equilibrium") and rr2 > 0 else None
     dirs, strains = [], []
     for t in tethers:
         ini = t.initial
