@@ -310,3 +310,46 @@ def test_streamed_run_checks_the_disk_and_cli_reports_it(tmp_path, monkeypatch, 
     err = capsys.readouterr().err
     assert "'output.count'" in err and "50 GiB free" in err and "Traceback" not in err
     assert calls[0] == 0 and not (tmp_path / "o" / "states.npy").exists()
+
+
+# -- the other paths through `tetherlab run` ----------------------------------------------------
+KEPLER = {
+    "name": "kepler-stop",
+    "duration": "6000 s",  # the period is 2 pi sqrt(a^3 / mu) = 5828 s
+    "central_body": {"name": "earth"},
+    "effects": {"central_gravity": {}},
+    # perigee radius a (1 - e) = 6930 km, below the stop radius 6378.137 + 571.863 = 6950 km
+    "bodies": {"sat": {"mass": "10 kg", "elements": {"a": "7000 km", "e": 0.01, "nu": "90 deg"}}},
+    "integrator": {"method": "dop853", "rtol": 1e-10, "atol": 1e-10},
+    "output": {"count": 50},
+}
+
+
+def test_a_terminal_stop_row_is_written_like_simulate_writes_it(tmp_path):
+    from tetherlab.scene import Scene
+
+    scene = Scene.from_dict({**KEPLER, "stop": {"altitude": "571.863 km"}})
+    ref = simulate(scene, progress=False)
+    assert ref.stats["stopped_by"] == "stop.altitude"
+    rec = run_to_dir(scene, tmp_path / "o", progress=False, part_rows=7)
+    assert rec["ok"] and rec["stats"]["stopped_by"] == "stop.altitude"
+    ts, dg = _tables(tmp_path / "o")
+    _same(ts, ref.timeseries)  # the stop state itself is the last row, in both
+    _same(dg, ref.diagnostics)
+
+
+def test_a_dromo_run_is_written_when_it_ends_and_is_not_resumable(tmp_path):
+    from tetherlab.scene import Scene
+
+    scene = Scene.from_dict({**KEPLER, "integrator": {**KEPLER["integrator"], "formulation": "dromo"}})
+    rec = run_to_dir(scene, tmp_path / "o", progress=False, part_rows=16)
+    assert rec["ok"] and not rec["resumable"] and not (tmp_path / "o" / "states.npy").exists()
+    _same(_tables(tmp_path / "o")[0], simulate(scene, progress=False).timeseries)
+    with pytest.raises(RunDirError, match="nothing to resume"):
+        resume_dir(tmp_path / "o")
+
+
+def test_resume_refuses_what_it_cannot_continue(tmp_path):
+    with pytest.raises(RunDirError, match="not a run directory"):
+        resume_dir(tmp_path)
+    assert main(["run", "--resume", str(tmp_path), "--quiet"]) == 2

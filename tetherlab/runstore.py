@@ -67,12 +67,16 @@ class RunDirError(RuntimeError):
 class Interrupted(Exception):
     """The run was stopped by SIGINT/SIGTERM after saving a checkpoint."""
 
-    def __init__(self, out_dir: Path, t: float, t_end: float, rows: int):
-        self.out_dir, self.t, self.t_end, self.rows = out_dir, t, t_end, rows
-        super().__init__(
-            f"interrupted at t = {t:.9g} s of {t_end:.9g} s; {rows} output rows saved in {out_dir}/. "
-            f"Continue with: tetherlab run --resume {out_dir}"
-        )
+    def __init__(self, out_dir: Path, t: float, t_end: float, rows: int, resumable: bool = True):
+        self.out_dir, self.t, self.t_end, self.rows, self.resumable = out_dir, t, t_end, rows, resumable
+        if resumable:
+            text = (f"interrupted at t = {t:.9g} s of {t_end:.9g} s; {rows} output rows saved in {out_dir}/. "
+                    f"Continue with: tetherlab run --resume {out_dir}")  # fmt: skip
+        else:
+            text = (f"interrupted; this run (DROMO formulation or a scipy method) keeps no checkpoints, "
+                    f"nothing was saved in {out_dir}/: run it again (the Cowell formulation with dop853, "
+                    f"vern9 or radau5 can be resumed)")  # fmt: skip
+        super().__init__(text)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -237,6 +241,10 @@ def run_to_dir(scene, out_dir, *, progress=None, checkpoint_s: float = 5.0, part
             )
     check_writable(out)
     prep = prepare(scene, outputs_in_memory=False, out_dir=out)
+    if not _streamable(prep):  # integrated in memory, written at the end
+        from .resources import check_scene
+
+        check_scene(scene, outputs_in_memory=True)
     for f in (STATES, CHECKPOINT):
         (out / f).unlink(missing_ok=True)
     m = int(prep.t_out.size)
@@ -403,16 +411,15 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
             res = _integrate_cowell(prep, p, bar.update, y_out=states, checkpoint=on_chunk, restart=restart)
         finally:
             bar.close()
-    return _finish(store, record, res, p, states, wall_before + time.perf_counter() - t_wall, chunks_before)
+        # (still under the handlers: a signal now, with the integration done, lets it finish)
+        return _finish(store, record, res, p, states, wall_before + time.perf_counter() - t_wall, chunks_before)
 
 
 def _run_in_memory(store: _Store, record: dict, progress):
     """DROMO and scipy runs: integrated in memory, written when they end (no checkpoints)."""
     from .pipeline import _integrate_cowell, _integrate_dromo, _ProgressBar
-    from .resources import check_scene
 
     prep = store.prep
-    check_scene(store.scene, outputs_in_memory=True)
     p = prep.model.fresh_params()
     bar = _ProgressBar(prep.t_out[-1], enabled=progress)
     t_wall = time.perf_counter()
@@ -421,6 +428,11 @@ def _run_in_memory(store: _Store, record: dict, progress):
             res, p = _integrate_dromo(prep, p, bar.update)
         else:
             res = _integrate_cowell(prep, p, bar.update)
+    except KeyboardInterrupt:
+        record["state"] = "interrupted"
+        record["message"] = "interrupted; this run keeps no checkpoints (DROMO or a scipy method): nothing was saved"
+        _write_json(store.out / RUN_JSON, record)
+        raise Interrupted(store.out, math.nan, float(prep.t_out[-1]), 0, resumable=False) from None
     finally:
         bar.close()
     return _finish(store, record, res, p, None, time.perf_counter() - t_wall, 0)
