@@ -30,8 +30,9 @@ def test_cli_run_writes_readable_results_and_plots(tmp_path):
     scene_file.write_text(text)
     out = tmp_path / "out"
     assert main(["run", str(scene_file), "--out", str(out), "--quiet"]) == 0
-    ts = pd.read_csv(out / "timeseries.csv")
-    dg = pd.read_csv(out / "diagnostics.csv")
+    # Parquet datasets written as the run goes (tetherlab/runstore.py), read whole by pandas
+    ts = pd.read_parquet(out / "timeseries")
+    dg = pd.read_parquet(out / "diagnostics")
     run = json.loads((out / "run.json").read_text())
     assert len(ts) == 21 and len(dg) == 21
     for col in ("t_s", "m0.x_m", "mf.vz_m_s", "main.node1.y_m", "main.rod2.strain", "main.rod1.axial_force_N",
@@ -120,7 +121,7 @@ step = "1 s"
 """
     )
     assert main(["run", str(f), "--out", str(out), "--quiet"]) == 1
-    assert len(pd.read_csv(out / "timeseries.csv")) >= 9
+    assert len(pd.read_parquet(out / "timeseries")) >= 9
 
 
 def test_only_named_effects_are_evaluated():

@@ -18,7 +18,16 @@ from .forces import effect as effect_spec
 from .formulations.cowell import cowell_rhs
 
 from .kernel.events import event_components, system_events
-from .kernel.layout import FAIL_TEXT, H_EV_STOP_R, H_FAIL_CODE, H_FAIL_ROD, H_FAIL_T, H_FAIL_VAL
+from .kernel.layout import (
+    FAIL_TEXT,
+    H_EV_STOP_R,
+    H_FAIL_CODE,
+    H_FAIL_EFFECT,
+    H_FAIL_EFFECT_T,
+    H_FAIL_ROD,
+    H_FAIL_T,
+    H_FAIL_VAL,
+)
 from .orbits.kepler import elements_to_cartesian
 from .result import Result
 from .system import (
@@ -191,7 +200,12 @@ def _body_spec(body) -> BodySpec:
     return BodySpec(body.name, body.mass_kg, bool(body.fixed), RigidSpec(r.inertia_kg_m2, tuple(wheels), control))
 
 
-def prepare(scene) -> Prepared:
+def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
+    """Build the model and initial state.  First checks that the run fits the machine
+    (tetherlab/resources.py): all outputs in memory (``simulate``), or streamed to ``out_dir``."""
+    from .resources import check_scene
+
+    check_scene(scene, outputs_in_memory=outputs_in_memory, out_dir=out_dir)
     mu = scene.central_body.mu_m3_s2
     central = {"mu_m3_s2": mu, "radius_m": scene.central_body.radius_m}
     effects = [(effect_spec(e.name), e.params_si) for e in scene.effects]
@@ -463,7 +477,9 @@ def _initial_state(scene, model: Model, root_name: str, tethers, mu: float, eq_m
     else:
         raise SceneError("orbit", "an [orbit] block or an initial state on the root body", "neither")
     r_ref, v_ref = ref
-    omega = np.cross(r_ref, v_ref) / float(r_ref @ r_ref) if motion in ("corotating", "equilibrium") else None
+    # (a reference point at the centre has no orbit to corotate with: no rotation)
+    rr2 = float(r_ref @ r_ref)
+    omega = np.cross(r_ref, v_ref) / rr2 if motion in ("corotating", "equilibrium") and rr2 > 0 else None
     dirs, strains = [], []
     for t in tethers:
         ini = t.initial
@@ -582,17 +598,30 @@ def _relative_equilibrium(model, y0, r_ref, v_ref, omega, reference, root_name, 
     return build(x)[0]
 
 
+def _failing_effect(p: np.ndarray, code: int) -> str:
+    """' (from effect NAME)' when a named effect's force was non-finite in the failing
+    evaluation (kernel/effects.py records it), else ''."""
+    from .forces import EFFECTS
+
+    ecode = int(p[H_FAIL_EFFECT])
+    if ecode <= 0 or (code != 0 and p[H_FAIL_EFFECT_T] != p[H_FAIL_T]):
+        return ""
+    names = [name for name, spec in EFFECTS.items() if spec.code == ecode]
+    name = names[0] if names else f"code {ecode}"
+    return f" (the effect {name!r} returned a non-finite force at t = {p[H_FAIL_EFFECT_T]:.9g} s)"
+
+
 def failure_message(p: np.ndarray, model: Model, status: int, t_end: float, base: str) -> str:
     code = int(p[H_FAIL_CODE])
     if code == 0:
-        return base
+        return base + _failing_effect(p, 0)
     rod = int(p[H_FAIL_ROD])
     where = ""
     if rod >= 0:
         for k, sl in enumerate(model.rod_slices):
             if sl.start <= rod < sl.stop:
                 where = f" in tether {model.tethers[k].name!r}, rod {rod - sl.start + 1} of {sl.stop - sl.start}"
-    why = FAIL_TEXT.get(code, f"failure code {code}")
+    why = FAIL_TEXT.get(code, f"failure code {code}") + _failing_effect(p, code)
     detail = f" (strain {p[H_FAIL_VAL]:.6g})" if code == 11 else ""
     return (
         f"run stopped at t = {t_end:.9g} s: {why}{where}{detail}; "
@@ -616,8 +645,18 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     else:
         res = _integrate_cowell(prep, p, bar.update)
     bar.close()
+    stats, message = run_outcome(prep, res, p, time.perf_counter() - t_wall)
+    d = diag.compute(prep.model, res.t, res.y)
+    result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)
+    if res.status != 0 and raise_on_failure:
+        raise SimulationError(message, result)
+    return result
+
+
+def run_outcome(prep: Prepared, res, p: np.ndarray, total_wall_s: float) -> tuple[dict, str]:
+    """The run statistics and the message (when, where and why a failed run stopped)."""
     stats = dict(res.stats)
-    stats["total_wall_s"] = time.perf_counter() - t_wall
+    stats["total_wall_s"] = total_wall_s
     stats["formulation"] = prep.formulation
     stats["events"] = [
         {"t_s": float(te), "event": prep.event_names[k], "side": "taut" if side > 0 else "slack"}
@@ -628,11 +667,7 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     stopped = res.stopped_by
     stats["stopped_by"] = None if stopped is None else prep.event_names[stopped]
     message = res.message if res.status == 0 else failure_message(p, prep.model, res.status, res.t_end, res.message)
-    d = diag.compute(prep.model, res.t, res.y)
-    result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)
-    if res.status != 0 and raise_on_failure:
-        raise SimulationError(message, result)
-    return result
+    return stats, message
 
 
 def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
@@ -660,7 +695,8 @@ def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
     return res, pe
 
 
-def _integrate_cowell(prep: Prepared, p: np.ndarray, progress):
+def _integrate_cowell(prep: Prepared, p: np.ndarray, progress, **store):
+    """``store``: y_out, checkpoint, restart for runs written as they go (tetherlab/runstore.py)."""
     from .integrators.driver import integrate
 
     return integrate(
@@ -679,6 +715,7 @@ def _integrate_cowell(prep: Prepared, p: np.ndarray, progress):
         # state-layout descriptor): RADAU5 reduces its Newton systems to n - NQT unknowns
         second_order=True if not prep.model.has_attitude else prep.model.n_qt,
         **_event_args(prep),
+        **store,
     )
 
 

@@ -1,6 +1,7 @@
 """The result of a run: time series, diagnostics, run statistics, and their files on disk.
 
-On disk (``Result.save(dir)``): ``timeseries.csv`` (every body, every tether node, strain and
+On disk (``Result.save(dir)``; ``tetherlab run`` writes the same tables as Parquet datasets as it
+goes, tetherlab/runstore.py, and :meth:`Result.load` reads either): ``timeseries.csv`` (every body, every tether node, strain and
 axial force per rod, reaction per joint), ``diagnostics.csv`` (momentum, angular momentum,
 energies, libration angles and their errors) and ``run.json`` (the scene, status and message,
 run statistics and library versions).  Both CSV files are read back by ``pandas.read_csv``.
@@ -192,12 +193,26 @@ class Result:
 
     @classmethod
     def load(cls, out_dir) -> "Result":
+        """A result saved by :meth:`save` (CSV) or written by ``tetherlab run`` (Parquet datasets,
+        tetherlab/runstore.py; an interrupted run loads with the rows computed so far)."""
         out = Path(out_dir)
         run = json.loads((out / "run.json").read_text())
-        ts = pd.read_csv(out / "timeseries.csv")
-        dg = pd.read_csv(out / "diagnostics.csv")
+        if (out / "timeseries").is_dir():
+            ts, dg = (_read_parts(out / name) for name in ("timeseries", "diagnostics"))
+        else:
+            ts = pd.read_csv(out / "timeseries.csv")
+            dg = pd.read_csv(out / "diagnostics.csv")
         meta = {k: v for k, v in run.items() if k not in {"status", "ok", "message", "stats", "scene"}}
-        return cls(ts, dg, run["stats"], run["status"], run["message"], run.get("scene", {}), meta)
+        status = run.get("status", 0 if run.get("state") == "complete" else -1)
+        return cls(ts, dg, run.get("stats", {}), status, run.get("message", ""), run.get("scene", {}), meta)
+
+
+def _read_parts(folder: Path) -> pd.DataFrame:
+    """The parts of a Parquet dataset in row order (part-000000, part-000001, ...)."""
+    parts = sorted(folder.glob("part-*.parquet"))
+    if not parts:
+        return pd.DataFrame()
+    return pd.concat([pd.read_parquet(f) for f in parts], ignore_index=True)
 
 
 def _json_default(o):

@@ -373,8 +373,15 @@ class Scene:
         raises a SceneError just as a bad file would.
         """
         names = {f.name for f in dataclasses.fields(Scene)}
-        fields = {k: v for k, v in changes.items() if k in names}
-        keys = {k: v for k, v in changes.items() if k not in names}
+
+        def parsed(v):  # a value already of a Scene field's type (OutputSpec, a tuple of Body...)
+            return dataclasses.is_dataclass(v) or (isinstance(v, tuple) and all(map(dataclasses.is_dataclass, v)))
+
+        # a name that is both a field and a scene key ("output") takes a scene-file value unless
+        # it is given already parsed: output={"count": 20} is validated like a file's [output]
+        as_field = {k for k in changes if k in names and not (k in _TOP_KEYS and not parsed(changes[k]))}
+        fields = {k: v for k, v in changes.items() if k in as_field}
+        keys = {k: v for k, v in changes.items() if k not in as_field}
         # The duration is one of two fields; setting one clears the other.
         if "duration_s" in fields and "duration_orbits" not in fields:
             fields["duration_orbits"] = None
@@ -523,8 +530,22 @@ def _required(table: Mapping[str, Any], key: str, path: str, expected: str) -> A
     return table[key]
 
 
+#: Largest magnitude accepted for a scene quantity (SI).  The model multiplies up to about four
+#: inputs (mu / r^3 times a mass, a norm squared): 1e40^4 = 1e160 stays far inside the double
+#: range (1e308), and every physical input of a tether scene fits with room (the Sun's mass is
+#: 2e30 kg, a light year 9.5e15 m).  Without it, a = "1e300 m" overflowed |r|^2 into a warning.
+SI_MAX = 1e40
+
+
+def _bounded(result: float, key: str, kind: Kind, value: Any) -> float:
+    if abs(result) > SI_MAX:
+        raise SceneError(key, f"{kind.describe()}, of magnitude at most {SI_MAX:g} in SI units (beyond, products "
+                         "of a few such values overflow double precision)", shown(value))  # fmt: skip
+    return result
+
+
 def _quantity(value: Any, key: str, kind: Kind, *, positive: bool = False, nonnegative: bool = False) -> float:
-    result = to_si(value, kind, key=key)
+    result = _bounded(to_si(value, kind, key=key), key, kind, value)
     if positive and not result > 0.0:
         raise SceneError(key, f"{kind.label} > 0 (e.g. '{kind.example}')", shown(value))
     if nonnegative and not result >= 0.0:
@@ -541,7 +562,7 @@ def _vector(value: Any, key: str, kind: Kind) -> Vector3:
         items = None
     if items is None or len(items) != 3:
         raise SceneError(key, f"a list of 3 components, each {kind.describe()}", shown(value))
-    return tuple(to_si(item, kind, key=f"{key}[{j}]") for j, item in enumerate(items))
+    return tuple(_bounded(to_si(item, kind, key=f"{key}[{j}]"), f"{key}[{j}]", kind, item) for j, item in enumerate(items))
 
 
 def _integer(value: Any, key: str, low: int, high: int | None = None) -> int:
@@ -743,10 +764,10 @@ def _parse_effects(value: Any) -> tuple[EffectUse, ...]:
             if pname in table:
                 if pspec.per_body and isinstance(table[pname], Mapping):
                     params_si[pname] = {
-                        str(b): to_si(v, kind, key=_join(key, str(b))) for b, v in table[pname].items()
+                        str(b): _bounded(to_si(v, kind, key=_join(key, str(b))), _join(key, str(b)), kind, v) for b, v in table[pname].items()
                     }
                 else:
-                    params_si[pname] = to_si(table[pname], kind, key=key)
+                    params_si[pname] = _bounded(to_si(table[pname], kind, key=key), key, kind, table[pname])
             elif pspec.required:
                 what = f"{kind.describe()}, or a table of one per body" if pspec.per_body else kind.describe()
                 raise SceneError(key, what, _NOTHING)
@@ -803,7 +824,7 @@ def _parse_elements(value: Any, path: str) -> Elements:
     table = _table(value, path, _ELEMENT_KEYS)
     a = _quantity(_required(table, "a", path, LENGTH.describe()), f"{path}.a", LENGTH)
     e_raw = _required(table, "e", path, "an eccentricity (a number >= 0, e.g. 0.01)")
-    e = to_si(e_raw, DIMENSIONLESS, key=f"{path}.e")
+    e = _bounded(to_si(e_raw, DIMENSIONLESS, key=f"{path}.e"), f"{path}.e", DIMENSIONLESS, e_raw)
     angles = {k: to_si(table[k], ANGLE, key=f"{path}.{k}") if k in table else 0.0 for k in _ELEMENT_KEYS[2:]}
 
     if e < 0.0:
@@ -1405,7 +1426,7 @@ def _parse_duration(value: Any) -> tuple[float | None, float | None]:
             return None, orbits
     if is_number(value):
         raise SceneError("duration", expected, f"{shown(value)} (missing unit)")
-    seconds = to_si(value, TIME, key="duration")
+    seconds = _bounded(to_si(value, TIME, key="duration"), "duration", TIME, value)
     if not seconds > 0.0:
         raise SceneError("duration", f"{expected}, > 0", shown(value))
     return seconds, None

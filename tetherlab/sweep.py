@@ -40,6 +40,7 @@ import math
 import multiprocessing
 import os
 import sys
+import tempfile
 import time
 import tomllib
 import traceback
@@ -48,7 +49,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-CACHE_FORMAT = 1  # bump when the cache file layout changes
+CACHE_FORMAT = 2  # bump when the cache file layout changes (2: a SHA-256 of the record in the record)
 
 
 # --------------------------------------------------------------------------------------------
@@ -63,7 +64,11 @@ def scene_hash(scene) -> str:
     float with ``repr``, so the hash changes with any digit of any value, and two scenes built
     differently (from a file, through ``replace``) but equal have the same hash.
     """
-    text = json.dumps(scene.to_dict(), sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    return _dict_hash(scene.to_dict())
+
+
+def _dict_hash(scene_dict: dict) -> str:
+    text = json.dumps(scene_dict, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
@@ -178,14 +183,45 @@ def _cache_path(cache_dir: Path, h: str, sname: str) -> Path:
     return cache_dir / CACHE_DIR.name / f"{h}.{safe}.json"
 
 
-def _read_cache(path: Path) -> dict | None:
+def _payload_digest(data: dict) -> str:
+    """SHA-256 of a cache record without its digest field (canonical JSON: sorted keys; floats
+    written by repr, so they read back to the same bits and the digest can be recomputed)."""
+    body = {k: v for k, v in data.items() if k != "sha256"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True, separators=(",", ":")).encode()).hexdigest()
+
+
+def _is_number(x: Any) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def _read_cache(path: Path, h: str | None = None, sname: str | None = None) -> dict | None:
+    """The cached record at ``path``, or None -- to be recomputed -- when it is missing or cannot
+    be trusted: not JSON (truncated by a killed writer, or corrupted), another format, a digest
+    that does not match its content (a flipped digit), fields of the wrong type, or a record of
+    another scene or summary function than the one asked for.  A bad entry is never a result."""
     try:
         data = json.loads(path.read_text())
     except FileNotFoundError:
         return None
-    except (OSError, json.JSONDecodeError):
-        return None  # a half-written file from a killed run: run it again
-    if data.get("format") != CACHE_FORMAT:
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return None
+    if not isinstance(data, dict) or data.get("format") != CACHE_FORMAT:
+        return None
+    if data.get("sha256") != _payload_digest(data):
+        return None
+    summary = data.get("summary")
+    if not (
+        isinstance(data.get("ok"), bool)
+        and isinstance(summary, dict)
+        and all(isinstance(k, str) and _is_number(v) for k, v in summary.items())
+        and (data.get("error") is None or isinstance(data.get("error"), str))
+        and _is_number(data.get("wall_s"))
+        and isinstance(data.get("scene"), dict)
+    ):
+        return None
+    if sname is not None and data.get("summary_function") != sname:
+        return None
+    if h is not None and _dict_hash(data["scene"]) != h:
         return None
     return data
 
@@ -200,10 +236,19 @@ def _write_cache(path: Path, record: RunRecord, sname: str, scene_dict: dict) ->
         "wall_s": record.wall_s,
         "scene": scene_dict,
     }
+    data["sha256"] = _payload_digest(data)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(f".tmp{os.getpid()}")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True))
-    os.replace(tmp, path)  # atomic: an interruption never leaves half a record behind
+    # A temporary file of its own (two sweeps, or two threads of a Dask worker, may write the
+    # same entry at once), then an atomic rename: a reader sees the old file or the whole new one.
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(json.dumps(data, indent=1, sort_keys=True))
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
 
 
 # --------------------------------------------------------------------------------------------
@@ -287,7 +332,7 @@ def run_sweep(
     todo: dict[tuple[str, str], list[int]] = {}  # (hash, summary) -> indices (duplicates run once)
     n_cached = 0
     for i, (h, sname) in enumerate(zip(hashes, snames)):
-        data = _read_cache(_cache_path(cache, h, sname)) if cache is not None else None
+        data = _read_cache(_cache_path(cache, h, sname), h, sname) if cache is not None else None
         if data is not None and (data["ok"] or not retry_failed):
             records[i] = RunRecord(h, labels[i], params[i], bool(data["ok"]), dict(data["summary"]),
                                    data["error"], float(data["wall_s"]), cached=True)

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 
+from ..errors import SceneError
 from .registry import EffectSpec, ParamSpec, register
 
 CODE_J2 = 10
@@ -53,10 +54,11 @@ _RADIUS = ParamSpec(
 )
 
 
-def _radius(params: dict, central: dict) -> float:
+def _radius(params: dict, central: dict, name: str) -> float:
     r = params.get("radius", central["radius_m"])
     if not r > 0.0:
-        raise ValueError(f"zonal harmonics: reference radius must be > 0 m, got {r!r} m")
+        key = f"effects.{name}.radius" if "radius" in params else "central_body.radius"
+        raise SceneError(key, "a reference radius > 0 m for the zonal harmonics", f"{r!r} m")
     return float(r)
 
 
@@ -71,7 +73,7 @@ SPEC_J2 = register(
         },
         velocity_dependent=False,
         conservative=True,
-        pack=lambda params, central, ctx: [central["mu_m3_s2"], _radius(params, central), params["J2"]],
+        pack=lambda params, central, ctx: [central["mu_m3_s2"], _radius(params, central, "j2"), params["J2"]],
     )
 )
 
@@ -89,7 +91,7 @@ SPEC_ZONAL = register(
         velocity_dependent=False,
         conservative=True,
         pack=lambda params, central, ctx: [
-            central["mu_m3_s2"], _radius(params, central), params["J2"], params["J3"], params["J4"],
+            central["mu_m3_s2"], _radius(params, central, "zonal"), params["J2"], params["J3"], params["J4"],
         ],
     )
 )

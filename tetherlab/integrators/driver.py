@@ -224,7 +224,8 @@ def warm_up(method, rhs, n, p):
 
 def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_steps=10**7,
               chunk_seconds=0.5, progress=None, fixed_step=False, second_order=False,
-              event=None, n_events=0, terminal=(), newton="auto"):  # fmt: skip
+              event=None, n_events=0, terminal=(), newton="auto", y_out=None, checkpoint=None,
+              restart=None):  # fmt: skip
     """Integrate y' = rhs(t, y; p) from t0 and return the solution at the times ``t_out``.
 
     ``method``: one of :data:`METHODS`.  ``rhs``: a cfunc with :data:`tetherlab._jit.RHS_SIG`.
@@ -249,6 +250,14 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     was used and, for "dense" under "auto", why.
     Never raises for a failure of the integration itself: that is
     reported in the result's ``status``/``message``, with every output computed before it.
+
+    Runs that write as they go (tetherlab/runstore.py; native methods only): ``y_out`` is the
+    caller's (len(t_out), n) output buffer (e.g. a memory-mapped file), returned as a view, never
+    copied; ``checkpoint(state)`` is called after each chunk that continues, with every value the
+    loop carries from one kernel call to the next (:func:`_loop_state`; ``p`` is the caller's);
+    ``restart=state`` continues from such a state.  Since a chunk ends right after an accepted
+    step and the kernels continue from (t, y, h, p, event state, RADAU5 workspace) exactly, a
+    continued run computes the same outputs bit for bit.
     """
     t0, y, tt, rtol, atol_v, h0, h_max, max_steps, chunk_seconds, fixed_step = _validate(
         method, rhs, t0, y0, t_out, p, rtol, atol, h0, h_max, max_steps, chunk_seconds,
@@ -264,7 +273,14 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     n = y.size
     m = tt.size
     compile_s = warm_up(method, rhs, n, p)
-    y_out = np.empty((m, n))
+    external = y_out is not None
+    if external:
+        if not (isinstance(y_out, np.ndarray) and y_out.dtype == np.float64 and y_out.shape == (m, n)
+                and y_out.flags.c_contiguous):  # fmt: skip
+            raise ValueError(f"y_out: expected a C-contiguous float64 array of shape {(m, n)}; got "
+                             f"{getattr(y_out, 'shape', type(y_out).__name__)}")  # fmt: skip
+    else:
+        y_out = np.empty((m, n))
     stats = np.zeros(8, dtype=np.int64)
     if isinstance(second_order, (bool, np.bool_)):
         if second_order and n % 2:
@@ -293,6 +309,16 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     chunk = _FIRST_CHUNK_STEPS
     n_chunks = 0
     resume = False
+    if restart is not None:
+        t, h, done, budget = float(restart["t"]), float(restart["h"]), int(restart["done"]), int(restart["budget"])
+        y[:] = restart["y"]
+        stats[:] = restart["stats"]
+        ev[:] = restart["ev"]
+        resume = bool(restart["resume"])
+        for a, b in zip(ws, restart["ws"]):
+            a[...] = b
+        events = [tuple(e) for e in restart["events"]]
+        events = [(float(a), int(b), int(c)) for a, b, c in events]
     wall0 = time.perf_counter()
     while True:
         steps_before = int(stats[ST_ACCEPTED])
@@ -340,6 +366,8 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
             progress(float(t))
         if status != MAX_STEPS or budget <= 0:
             break
+        if checkpoint is not None:
+            checkpoint(_loop_state(t, y, h, done, budget, stats, ev, ws, resume, events))
         rate = steps / max(dt, 1e-9)
         chunk = int(min(max(rate * chunk_seconds, 1.0), chunk * _MAX_CHUNK_GROWTH))
     wall_s = time.perf_counter() - wall0
@@ -364,13 +392,18 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     msg = status_message(status, t, h, stats_d["rhs_status"], stats_d["n_newton_fail"], max_steps)
     # Only rows that were computed are returned; a failed run's unused rows are dropped (copied
     # out so the unused tail of a large buffer is freed).
-    y_res = y_out if done == m else y_out[:done].copy()
+    # A caller's buffer is returned as a view (it may be a file larger than memory).
+    y_res = y_out if done == m else (y_out[:done] if external else y_out[:done].copy())
     t_res = tt[:done].copy()
     if stopped_by is not None:
         msg = f"stopped by terminal event {stopped_by} at t={t!r}"
         if t_stop_row is not None:  # the stop state itself is the last row
             t_res = np.concatenate([t_res, [t_stop_row[0]]])
-            y_res = np.concatenate([y_res, t_stop_row[1][None, :]])
+            if external and done < m:  # the first unreached row of the buffer holds it
+                y_out[done] = t_stop_row[1]
+                y_res = y_out[: done + 1]
+            else:
+                y_res = np.concatenate([y_res, t_stop_row[1][None, :]])
     stats_d["n_events"] = len(events)
     return IntegrationResult(
         t=t_res, y=y_res, status=status, message=msg, t_end=t, y_end=y.copy(),
@@ -394,6 +427,14 @@ def _newton_choice(method, newton, p, n, second_order):
     if newton == "structured":
         raise ValueError(f"newton: 'structured' is not available for this state: {why}")
     return f"dense ({why})", None
+def _loop_state(t, y, h, done, budget, stats, ev, ws, resume, events) -> dict:
+    """Everything :func:`integrate`'s loop carries between kernel calls (copies), for
+    ``checkpoint``/``restart``: with ``p`` it determines the rest of the run."""
+    return {
+        "t": float(t), "h": float(h), "done": int(done), "budget": int(budget), "y": y.copy(),
+        "stats": stats.copy(), "ev": ev.copy(), "ws": [a.copy() for a in ws], "resume": bool(resume),
+        "events": [tuple(e) for e in events],
+    }  # fmt: skip
 
 
 def _check_events(method, event, n_events, terminal):

@@ -19,13 +19,25 @@ Adding an effect = one module in tetherlab/forces/ + one branch in each function
 
 from __future__ import annotations
 
+import math
+
 from .._jit import njit
 from ..forces import applied_force, central_gravity, uniform_gravity
 from ..forces import stiefel_moon  # Stiefel-Scheifele analytic Moon, code 30
 from ..forces import third_body, zonal  # gravity family, codes 10-13
 from ..forces import drag, electrodynamic  # codes 20-29
 from ..forces import oml  # code 22: OML bare-tether current (issue 13)
-from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_CNT, H_OFF_EFF
+from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_FAIL_EFFECT, H_FAIL_EFFECT_T, H_NEFF, H_OFF_CNT, H_OFF_EFF
+
+
+@njit(cache=True)
+def _note_nonfinite(p, code, t, ax, ay, az):
+    """Record which effect produced a non-finite force (the chain's failure header says where
+    and when the acceleration broke; this says which named effect caused it).  Three compares
+    per effect evaluation."""
+    if not (math.isfinite(ax) and math.isfinite(ay) and math.isfinite(az)):
+        p[H_FAIL_EFFECT] = code
+        p[H_FAIL_EFFECT_T] = t
 
 
 @njit(cache=True)
@@ -69,10 +81,12 @@ def _body_force(p, t, body, x, y, z, vx, vy, vz, mass, central):
         else:
             p[cnt + code] += 1.0
             ax, ay, az = _other_body(p, code, par, t, body, x, y, z, vx, vy, vz, mass)
+            _note_nonfinite(p, code, t, ax, ay, az)
             fx += ax
             fy += ay
             fz += az
             continue
+        _note_nonfinite(p, code, t, ax, ay, az)
         fx += mass * ax
         fy += mass * ay
         fz += mass * az
@@ -126,11 +140,13 @@ def rod_force_density(p, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
         p[cnt + code] += 1.0
         if code == central_gravity.CODE:
             ax, ay, az = central_gravity.accel(p[par], x, y, z)
+            _note_nonfinite(p, code, t, ax, ay, az)
             fx += mass_per_xi * ax
             fy += mass_per_xi * ay
             fz += mass_per_xi * az
         else:
             ax, ay, az = _other_rod(p, code, par, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi)
+            _note_nonfinite(p, code, t, ax, ay, az)
             fx += ax
             fy += ay
             fz += az

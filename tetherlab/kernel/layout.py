@@ -54,6 +54,8 @@ H_DEFECT = 33      # MUT_* / DEFECT_*: a deliberate defect for the verification'
 H_MUTANT = H_DEFECT  # the name tetherlab.mutants uses
 H_NROOT = 34       # number of root bodies
 H_OFF_ROOTS = 35   # offset of the root list (NROOT body indices)
+H_FAIL_EFFECT = 36    # code of the last effect whose force came out non-finite (0 = none): kernel/effects.py
+H_FAIL_EFFECT_T = 37  # time of that evaluation
 H_SIZE = 40
 
 # -- deliberate defects: one registry of codes (tetherlab/mutants.py; like MODEL_PRINTED) -----------

@@ -1,0 +1,487 @@
+"""Runs that write as they go and can be continued: ``tetherlab run --out DIR`` / ``--resume DIR``.
+
+A run directory holds
+
+* ``run.json`` -- the scene (whole), the run's state (``running``, ``interrupted``, ``complete``,
+  ``failed``), its message, statistics, library versions and the layout below;
+* ``states.npy`` -- the integrator's output buffer itself, a memory-mapped ``(outputs, n)`` file
+  (numpy ``.npy``): the kernel writes each output row straight into it, so outputs never have to
+  fit in memory and every row written is on disk (in the page cache) as soon as it is computed;
+* ``timeseries/part-NNNNNN.parquet`` and ``diagnostics/part-NNNNNN.parquet`` -- the same columns
+  as ``Result.timeseries``/``Result.diagnostics``, as a Parquet dataset (pyarrow): part k holds
+  output rows ``[k B, (k+1) B)`` with B = ``part_rows`` fixed in ``run.json`` when the run starts
+  (``pandas.read_parquet(DIR / "timeseries")`` reads it whole);
+* ``checkpoint.npz`` -- everything the integration loop carries from one kernel call to the next
+  (tetherlab/integrators/driver.py ``_loop_state``): time, state vector, next step size, the
+  event state, RADAU5's workspace, the step statistics, the located events, the remaining step
+  budget, and the whole parameter block ``p`` (effect evaluation counters, failure header, the
+  kernel's scratch).  Written every ``checkpoint_s`` seconds of wall time, atomically (temporary
+  file + ``os.replace``), after the state rows it covers are flushed.
+
+What is identical, and why.  The driver calls the compiled kernel in chunks of accepted steps;
+each call returns right after an accepted step, and a call that starts from the returned
+(t, y, h, p, event state, RADAU5 workspace) takes exactly the steps one long call would have
+taken (the only other thing the kernels carry between steps is f(t, y), recomputed from the same
+numbers).  A checkpoint is such a between-chunks state, so a run continued from it takes the same
+steps and writes the same output rows, bit for bit, as the run that was never interrupted -- and
+as ``simulate()``, which uses the same loop.  The derived columns of a part are computed from
+that part's rows only (plus the first row, the reference of the relative errors), and parts have
+fixed row ranges, so the Parquet files hold the same numbers too.  Not identical: wall times, the
+number of chunks, and ``n_rhs`` with the effect evaluation counters (each kernel call evaluates
+f(t, y) once more at its start, and chunk sizes follow the measured speed of the machine).
+
+Ctrl-C (SIGINT) or SIGTERM: the signal only sets a flag; after the kernel call in progress
+returns (about half a second), the state is checkpointed, the rows computed are written as
+Parquet, ``run.json`` says ``interrupted``, and :class:`Interrupted` tells the caller (the CLI
+prints how to resume).  A SIGKILL leaves the last checkpoint: the run continues from there.
+
+Only the native methods on the Cowell formulation are checkpointed (the loop above); a DROMO
+or scipy run writes the same files when it ends, and cannot be resumed.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+FORMAT = 1
+STATES = "states.npy"
+CHECKPOINT = "checkpoint.npz"
+RUN_JSON = "run.json"
+TABLES = ("timeseries", "diagnostics")
+
+
+class RunDirError(RuntimeError):
+    """The output directory cannot hold the run (unwritable, or holds another unfinished run),
+    or a directory to resume is not a resumable run.  Raised before anything is integrated."""
+
+
+class Interrupted(Exception):
+    """The run was stopped by SIGINT/SIGTERM after saving a checkpoint."""
+
+    def __init__(self, out_dir: Path, t: float, t_end: float, rows: int, resumable: bool = True):
+        self.out_dir, self.t, self.t_end, self.rows, self.resumable = out_dir, t, t_end, rows, resumable
+        if resumable:
+            text = (f"interrupted at t = {t:.9g} s of {t_end:.9g} s; {rows} output rows saved in {out_dir}/. "
+                    f"Continue with: tetherlab run --resume {out_dir}")  # fmt: skip
+        else:
+            text = (f"interrupted; this run (DROMO formulation or a scipy method) keeps no checkpoints, "
+                    f"nothing was saved in {out_dir}/: run it again (the Cowell formulation with dop853, "
+                    f"vern9 or radau5 can be resumed)")  # fmt: skip
+        super().__init__(text)
+
+
+# ----------------------------------------------------------------------------------------------
+# small file helpers
+# ----------------------------------------------------------------------------------------------
+def _atomic_write_bytes(path: Path, data: bytes) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _write_json(path: Path, data: dict) -> None:
+    from .result import _json_default
+
+    _atomic_write_bytes(path, json.dumps(data, indent=2, default=_json_default).encode())
+
+
+def _read_json(path: Path) -> dict:
+    return json.loads(path.read_text())
+
+
+def check_writable(out: Path) -> None:
+    """Create ``out`` and prove a file can be written there, else RunDirError (before any run)."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(dir=out, prefix=".write-test-")
+        os.write(fd, b"x")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise RunDirError(
+            f"cannot write the output directory {str(out)!r}: {reason}. Nothing was run; choose another --out"
+        ) from None
+
+
+def _part_name(k: int) -> str:
+    return f"part-{k:06d}.parquet"
+
+
+# ----------------------------------------------------------------------------------------------
+# the store
+# ----------------------------------------------------------------------------------------------
+class _Store:
+    def __init__(self, out: Path, scene, prep, part_rows: int):
+        self.out = out
+        self.scene = scene
+        self.prep = prep
+        self.part_rows = int(part_rows)
+        self.m = int(prep.t_out.size)
+        self.n = int(prep.y0.size)
+
+    # -- derived tables ------------------------------------------------------------------------
+    def write_part(self, k: int, t: np.ndarray, Y: np.ndarray, p: np.ndarray, first: np.ndarray | None) -> None:
+        """Part k from output rows (t, Y); ``first`` is the state at t_out[0] (the reference of
+        the relative-error columns) when the part does not start with it."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        from . import diagnostics as diag
+        from .result import Result
+
+        if first is not None:
+            t = np.concatenate([[self.prep.t_out[0]], t])
+            Y = np.concatenate([first[None, :], Y])
+        Y = np.asarray(Y)
+        d = diag.compute(self.prep.model, t, Y)
+        r = Result.from_run(self.scene, self.prep, t, Y, d, {}, 0, "", p)
+        for name, frame in zip(TABLES, (r.timeseries, r.diagnostics)):
+            if first is not None:
+                frame = frame.iloc[1:]
+            table = pa.Table.from_pandas(frame, preserve_index=False)
+            folder = self.out / name
+            folder.mkdir(exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=folder, prefix=".part-", suffix=".tmp")
+            os.close(fd)
+            try:
+                pq.write_table(table, tmp)
+                os.replace(tmp, folder / _part_name(k))
+            except BaseException:
+                if os.path.exists(tmp):
+                    os.unlink(tmp)
+                raise
+
+    def parts_present(self) -> set[int]:
+        have = None
+        for name in TABLES:
+            ks = {int(f.name[5:11]) for f in (self.out / name).glob("part-*.parquet")} if (self.out / name).is_dir() else set()
+            have = ks if have is None else have & ks
+        return have or set()
+
+    def drop_parts_from(self, k0: int) -> None:
+        for name in TABLES:
+            folder = self.out / name
+            if folder.is_dir():
+                for f in folder.glob("part-*.parquet"):
+                    if int(f.name[5:11]) >= k0:
+                        f.unlink()
+
+    def write_full_parts(self, states, done: int, p: np.ndarray, have: set[int]) -> None:
+        """Every part whose rows are all computed and that is not on disk yet."""
+        B = self.part_rows
+        for k in range(done // B):
+            if k in have:
+                continue
+            a, b = k * B, (k + 1) * B
+            self.write_part(k, self.prep.t_out[a:b], states[a:b], p, None if a == 0 else states[0])
+            have.add(k)
+
+
+# ----------------------------------------------------------------------------------------------
+# running
+# ----------------------------------------------------------------------------------------------
+def _streamable(prep) -> bool:
+    from .integrators.driver import NATIVE_METHODS
+
+    return prep.formulation == "cowell" and prep.method in NATIVE_METHODS
+
+
+def _part_rows_for(scene, m: int) -> int:
+    from .resources import STREAM_BATCH_BYTES, estimate
+
+    need = estimate(scene)
+    per = need.row_bytes_memory if need is not None else 8 * 64
+    return int(max(1, min(m, STREAM_BATCH_BYTES // max(per, 1))))
+
+
+def _code_digest() -> str:
+    from ._jit import CACHE_DIR
+
+    return CACHE_DIR.name
+
+
+def run_to_dir(scene, out_dir, *, progress=None, checkpoint_s: float = 5.0, part_rows: int | None = None,
+               overwrite_unfinished: bool = False):  # fmt: skip
+    """Integrate ``scene`` writing into ``out_dir`` as it goes; returns the run.json record.
+
+    Raises RunDirError (before integrating) when ``out_dir`` cannot be written or holds an
+    unfinished run, SceneError for a bad or too large scene, :class:`Interrupted` on SIGINT or
+    SIGTERM.  A run that fails is recorded (``state = "failed"``, every output so far kept) and
+    returned with ``ok`` false: the caller decides how to report it.
+    """
+    from .pipeline import prepare
+
+    out = Path(out_dir)
+    old = out / RUN_JSON
+    if old.exists() and not overwrite_unfinished:
+        try:
+            state = _read_json(old).get("state")
+        except (OSError, ValueError):
+            state = None
+        if state in ("running", "interrupted"):
+            raise RunDirError(
+                f"{str(out)!r} holds an unfinished run (state {state!r}); continue it with "
+                f"`tetherlab run --resume {out}`, or choose another --out"
+            )
+    check_writable(out)
+    prep = prepare(scene, outputs_in_memory=False, out_dir=out)
+    if not _streamable(prep):  # integrated in memory, written at the end
+        from .resources import check_scene
+
+        check_scene(scene, outputs_in_memory=True)
+    for f in (STATES, CHECKPOINT):
+        (out / f).unlink(missing_ok=True)
+    m = int(prep.t_out.size)
+    B = int(part_rows) if part_rows else _part_rows_for(scene, m)
+    store = _Store(out, scene, prep, B)
+    store.drop_parts_from(0)
+    record = {
+        "format": FORMAT,
+        "state": "running",
+        "scene": scene.to_dict(),
+        "rows": m,
+        "state_length": int(prep.y0.size),
+        "part_rows": B,
+        "code_digest": _code_digest(),
+        "resumable": _streamable(prep),
+        "segments": 0,
+    }
+    _write_json(out / RUN_JSON, record)
+    if not _streamable(prep):
+        return _run_in_memory(store, record, progress)
+    states = np.lib.format.open_memmap(out / STATES, mode="w+", dtype=np.float64, shape=(m, prep.y0.size))
+    return _run_streamed(store, record, states, prep.model.fresh_params(), None, progress, checkpoint_s)
+
+
+def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
+    """Continue the run in ``out_dir`` from its last checkpoint (see the module docstring)."""
+    from .pipeline import prepare
+    from .scene import Scene
+
+    out = Path(out_dir)
+    try:
+        record = _read_json(out / RUN_JSON)
+    except FileNotFoundError:
+        raise RunDirError(f"{str(out)!r} is not a run directory (no {RUN_JSON}); start a run with --out") from None
+    except (OSError, ValueError) as exc:
+        raise RunDirError(f"cannot read {str(out / RUN_JSON)!r}: {exc}") from None
+    state = record.get("state")
+    if record.get("format") != FORMAT:
+        raise RunDirError(f"{str(out)!r}: run directory format {record.get('format')!r}, expected {FORMAT}")
+    if state in ("complete", "failed"):
+        raise RunDirError(f"{str(out)!r}: nothing to resume, the run is {state} ({record.get('message', '')})")
+    if not record.get("resumable"):
+        raise RunDirError(f"{str(out)!r}: this run cannot be resumed (only native methods on the Cowell "
+                          f"formulation are checkpointed); start it again with --out")  # fmt: skip
+    if record.get("code_digest") != _code_digest():
+        raise RunDirError(
+            f"{str(out)!r} was started by other tetherlab sources (digest {record.get('code_digest')}, these are "
+            f"{_code_digest()}): its continuation would not be the same computation; start it again with --out"
+        )
+    check_writable(out)
+    scene = Scene.from_dict(record["scene"])
+    prep = prepare(scene, outputs_in_memory=False, out_dir=out)
+    m = int(prep.t_out.size)
+    if m != record["rows"] or prep.y0.size != record["state_length"]:
+        raise RunDirError(f"{str(out)!r}: the stored scene rebuilds to {m} outputs of {prep.y0.size} "
+                          f"floats, the run has {record['rows']} of {record['state_length']}")  # fmt: skip
+    store = _Store(out, scene, prep, record["part_rows"])
+    p = prep.model.fresh_params()
+    restart = None
+    ck = out / CHECKPOINT
+    if ck.exists() and (out / STATES).exists():
+        with np.load(ck, allow_pickle=False) as z:
+            if z["p"].shape != p.shape:
+                raise RunDirError(f"{str(ck)!r}: parameter block of {z['p'].size} floats, the model has {p.size}")
+            p[:] = z["p"]
+            restart = {
+                "t": float(z["t"]), "h": float(z["h"]), "done": int(z["done"]), "budget": int(z["budget"]),
+                "y": z["y"].copy(), "stats": z["stats"].copy(), "ev": z["ev"].copy(),
+                "ws": [z[f"ws{i}"].copy() for i in range(int(z["n_ws"]))], "resume": bool(z["resume"]),
+                "events": [tuple(e) for e in z["events"].tolist()],
+                "wall_s": float(z["wall_s"]), "n_chunks": int(z["n_chunks"]),
+            }  # fmt: skip
+        states = np.lib.format.open_memmap(out / STATES, mode="r+")
+        if states.shape != (m, prep.y0.size):
+            raise RunDirError(f"{str(out / STATES)!r}: shape {states.shape}, expected {(m, prep.y0.size)}")
+    else:  # killed before its first checkpoint: nothing to continue from, start it over
+        states = np.lib.format.open_memmap(out / STATES, mode="w+", dtype=np.float64, shape=(m, prep.y0.size))
+    done = restart["done"] if restart else 0
+    # Parts past the checkpoint (written after it, or a partial last part) are rebuilt.
+    store.drop_parts_from(done // store.part_rows)
+    return _run_streamed(store, record, states, p, restart, progress, checkpoint_s)
+
+
+class _Signals:
+    """SIGINT/SIGTERM set a flag while a run is integrating (main thread only)."""
+
+    def __init__(self):
+        self.hit = None
+        self.saved = {}
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for s in (signal.SIGINT, signal.SIGTERM):
+                self.saved[s] = signal.signal(s, self._handler)
+        return self
+
+    def _handler(self, signum, frame):
+        self.hit = signum
+
+    def __exit__(self, *exc):
+        for s, h in self.saved.items():
+            signal.signal(s, h)
+        return False
+
+
+def _run_streamed(store: _Store, record: dict, states, p, restart, progress, checkpoint_s):
+    from .integrators.driver import IntegrationResult  # noqa: F401  (the result type returned below)
+    from .pipeline import _integrate_cowell, _ProgressBar
+
+    prep = store.prep
+    out = store.out
+    have = store.parts_present()
+    if restart is not None:
+        store.write_full_parts(states, restart["done"], p, have)  # any a kill left unwritten
+    wall_before = restart["wall_s"] if restart else 0.0
+    chunks_before = restart["n_chunks"] if restart else 0
+    record["segments"] = int(record.get("segments", 0)) + 1
+    record["state"] = "running"
+    _write_json(out / RUN_JSON, record)
+    bar = _ProgressBar(prep.t_out[-1], enabled=progress)
+    t_wall = time.perf_counter()
+    last_ck = [time.perf_counter()]
+
+    def save_checkpoint(state):
+        states.flush()
+        arrays = {f"ws{i}": a for i, a in enumerate(state["ws"])}
+        ev = np.array(state["events"], dtype=float).reshape(-1, 3)
+        fd, tmp = tempfile.mkstemp(dir=out, prefix=".checkpoint-", suffix=".npz")
+        os.close(fd)
+        try:
+            np.savez(
+                tmp, t=state["t"], h=state["h"], done=state["done"], budget=state["budget"], y=state["y"],
+                stats=state["stats"], ev=state["ev"], resume=state["resume"], events=ev, p=p,
+                n_ws=len(state["ws"]), wall_s=wall_before + time.perf_counter() - t_wall,
+                n_chunks=chunks_before, **arrays,
+            )  # fmt: skip
+            os.replace(tmp, out / CHECKPOINT)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+        last_ck[0] = time.perf_counter()
+
+    with _Signals() as sig:
+
+        def on_chunk(state):
+            store.write_full_parts(states, state["done"], p, have)
+            if sig.hit is not None or time.perf_counter() - last_ck[0] >= checkpoint_s:
+                save_checkpoint(state)
+            if sig.hit is not None:
+                done = state["done"]
+                k = done // store.part_rows
+                a = k * store.part_rows
+                if done > a:  # the rows of the unfinished part, readable now, rebuilt on resume
+                    store.write_part(k, prep.t_out[a:done], states[a:done], p, None if a == 0 else states[0])
+                record["state"] = "interrupted"
+                record["message"] = f"interrupted (signal {sig.hit}) at t = {state['t']:.9g} s"
+                record["t_s"] = state["t"]
+                record["rows_done"] = done
+                _write_json(out / RUN_JSON, record)
+                raise Interrupted(out, state["t"], float(prep.t_out[-1]), done)
+
+        try:
+            res = _integrate_cowell(prep, p, bar.update, y_out=states, checkpoint=on_chunk, restart=restart)
+        finally:
+            bar.close()
+        # (still under the handlers: a signal now, with the integration done, lets it finish)
+        return _finish(store, record, res, p, states, wall_before + time.perf_counter() - t_wall, chunks_before)
+
+
+def _run_in_memory(store: _Store, record: dict, progress):
+    """DROMO and scipy runs: integrated in memory, written when they end (no checkpoints)."""
+    from .pipeline import _integrate_cowell, _integrate_dromo, _ProgressBar
+
+    prep = store.prep
+    p = prep.model.fresh_params()
+    bar = _ProgressBar(prep.t_out[-1], enabled=progress)
+    t_wall = time.perf_counter()
+    try:
+        if prep.formulation != "cowell":
+            res, p = _integrate_dromo(prep, p, bar.update)
+        else:
+            res = _integrate_cowell(prep, p, bar.update)
+    except KeyboardInterrupt:
+        record["state"] = "interrupted"
+        record["message"] = "interrupted; this run keeps no checkpoints (DROMO or a scipy method): nothing was saved"
+        _write_json(store.out / RUN_JSON, record)
+        raise Interrupted(store.out, math.nan, float(prep.t_out[-1]), 0, resumable=False) from None
+    finally:
+        bar.close()
+    return _finish(store, record, res, p, None, time.perf_counter() - t_wall, 0)
+
+
+def _finish(store: _Store, record: dict, res, p, states, wall_s: float, chunks_before: int) -> dict:
+    from .pipeline import run_outcome
+    from .result import library_versions
+
+    prep = store.prep
+    out = store.out
+    rows = int(len(res.t))
+    # the driver returns a view of the states file, with a terminal event's stop row in the first
+    # unreached row; only a stop after the last output time comes back as a copy in memory
+    Y = res.y if (states is None or rows > states.shape[0]) else states
+    if states is not None:
+        states.flush()
+    B = store.part_rows
+    have = store.parts_present()
+    for k in range(math.ceil(rows / B)):
+        a, b = k * B, min((k + 1) * B, rows)
+        if k in have and b - a == B:
+            continue
+        store.write_part(k, res.t[a:b], Y[a:b], p, None if a == 0 else Y[0])
+    stats, message = run_outcome(prep, res, p, wall_s)
+    stats["wall_s"] = wall_s
+    stats["n_chunks"] = int(stats.get("n_chunks", 0)) + chunks_before
+    record.update(
+        state="complete" if res.status == 0 else "failed",
+        status=int(res.status),
+        ok=res.status == 0,
+        message=message,
+        stats=stats,
+        rows_done=rows,
+        t_s=float(res.t_end),
+        versions=library_versions(),
+        model={
+            "rods": [t.rods for t in prep.model.tethers],
+            "effects": prep.model.effect_names,
+            "method": prep.method,
+            "rtol": prep.rtol,
+            "ref_radius_m": prep.ref_radius_m,
+            "ref_period_s": prep.ref_period_s,
+        },
+    )
+    from .result import _effect_counts
+
+    record["effect_evaluations"] = _effect_counts(p, prep.model)
+    record["effect_meta"] = prep.model.effect_meta
+    _write_json(out / RUN_JSON, record)
+    (out / CHECKPOINT).unlink(missing_ok=True)
+    return record
