@@ -389,3 +389,18 @@ def test_eclipse_epoch_outside_de421_is_a_scene_error():
     with pytest.raises(SceneError) as err:
         prepare(sc)
     assert err.value.key == "epoch"
+
+
+def test_full_environment_scene_loads_with_every_level_named():
+    # studies/scenes/deorbit-ed-fullenv.toml: the top of the fidelity ladder as a scene file
+    from tetherlab.scene import load_scene
+
+    sc = load_scene(ROOT / "studies" / "scenes" / "deorbit-ed-fullenv.toml")
+    eff = {e.name: e.params_si for e in sc.effects}
+    assert set(eff) == {"central_gravity", "j2", "sun_de421", "moon_de421", "oml", "drag"}
+    assert eff["oml"]["field"] == "igrf14" and eff["oml"]["eclipse"] == "conical"
+    assert eff["oml"]["conductivity"] == pytest.approx(3.5e7)  # S/m, as written
+    assert eff["drag"]["atmosphere"] == "nrlmsis21" and eff["drag"]["refresh"] == pytest.approx(10 * 86400.0)
+    # round trip through the scene dictionary keeps the choices
+    again = type(sc).from_dict(sc.to_dict())
+    assert {e.name: e.params_si for e in again.effects}["oml"]["cathode"] == "from"
