@@ -389,3 +389,52 @@ def test_eclipse_epoch_outside_de421_is_a_scene_error():
     with pytest.raises(SceneError) as err:
         prepare(sc)
     assert err.value.key == "epoch"
+
+
+def test_full_environment_scene_loads_with_every_level_named():
+    # studies/scenes/deorbit-ed-fullenv.toml: the top of the fidelity ladder as a scene file
+    from tetherlab.scene import load_scene
+
+    sc = load_scene(ROOT / "studies" / "scenes" / "deorbit-ed-fullenv.toml")
+    eff = {e.name: e.params_si for e in sc.effects}
+    assert set(eff) == {"central_gravity", "j2", "sun_de421", "moon_de421", "oml", "drag"}
+    assert eff["oml"]["field"] == "igrf14" and eff["oml"]["eclipse"] == "conical"
+    assert eff["oml"]["conductivity"] == pytest.approx(3.5e7)  # S/m, as written
+    assert eff["drag"]["atmosphere"] == "nrlmsis21" and eff["drag"]["refresh"] == pytest.approx(10 * 86400.0)
+    # round trip through the scene dictionary keeps the choices
+    again = type(sc).from_dict(sc.to_dict())
+    assert {e.name: e.params_si for e in again.effects}["oml"]["cathode"] == "from"
+
+
+@pytest.mark.parametrize("degree", [0, 14, 2.5])
+def test_igrf_degree_outside_1_to_13_is_a_scene_error(degree):
+    from tetherlab.pipeline import prepare
+
+    sc = _ed_scene(**{"effects.electrodynamic.field": "igrf14", "effects.electrodynamic.igrf_degree": degree,
+                      "duration": "1 d"})
+    with pytest.raises(SceneError) as err:
+        prepare(sc)
+    assert err.value.key == "effects.electrodynamic.igrf_degree"
+
+
+def test_igrf_degree_one_equals_the_dipole_of_the_epoch_in_the_effect():
+    # igrf_degree = 1: the field of the effect is the centred dipole K = a^3 (g11, h11, g10) of the
+    # epoch's coefficients (docs/effects-electrodynamic.md eq. 1), in inertial axes rotated by theta_0
+    from tetherlab.environment import igrf, magnetic
+    from tetherlab.forces import EFFECTS
+    from tetherlab.system import TetherSpec, build_model
+
+    params = {"current": 2.0, "field": "igrf14", "igrf_degree": 1.0, "dipole_strength": 8e15,
+              "greenwich_angle": 0.7, "eclipse": "none"}
+    tet = TetherSpec("main", 1, 5000.0, 7.9e4, 15.0, 0.0, "paper", 392.2, "end_mass")
+    model = build_model(root_mass_kg=1063.0, tethers=[tet], effects=[(EFFECTS["electrodynamic"], params)],
+                        central={"mu_m3_s2": MU_EARTH, "radius_m": R_EARTH}, epoch=EPOCH, duration_s=86400.0)
+    p = model.fresh_params()
+    par = int(p[int(p[8]) + 1])
+    g, h, _, _ = igrf.coefficients_at(igrf.epoch_datetime(EPOCH), 1)
+    a = igrf.IGRF_REFERENCE_RADIUS_M
+    k = a**3 * np.array([g[1, 1], h[1, 1], g[1, 0]])
+    c, s = math.cos(0.7), math.sin(0.7)
+    k_in = np.array([c * k[0] - s * k[1], s * k[0] + c * k[1], k[2]])
+    r = np.array([5.0e6, -4.0e6, 3.0e6])
+    np.testing.assert_allclose(magnetic.field(p, par + 2, 0.0, *r), magnetic.dipole(*k_in, *r), rtol=1e-12, atol=1e-18)

@@ -20,7 +20,7 @@ from .effects import EPOCH, _time_rhs_advancing
 DURATION_S = 10 * 86400.0
 RODS = (1, 4, 16)
 ED = {"current": 2.0, "dipole_strength": 8e15, "eclipse": "none"}
-DRAG = {"area": 1.0, "cd": 2.2, "tether_cd": 2.2}
+DRAG = {"area": {"m0": 1.0, "mf": 1.0}, "cd": {"m0": 2.2, "mf": 2.2}, "tether_cd": 2.2}  # per body (m0 root, mf tip)
 
 #: (label, effect name, parameters)
 LEVELS = (

@@ -149,8 +149,11 @@ def pack_field_for(params: dict, ctx: dict, effect: str) -> list[float]:
                 f"a run inside {igrf.GENERATION}'s coefficients ({first.date()} to {last.date()}) for effects.{effect}.field",
                 f"{epoch!r} to {end.isoformat(timespec='seconds')}",
             )
-        blk = igrf.pack(date)
-        meta["field"] = f"{igrf.GENERATION} degree {igrf.NMAX} ({igrf.coefficient_file()} via ppigrf), coefficients at {date.isoformat()}"
+        degree = params.get("igrf_degree", float(igrf.NMAX))
+        if not (degree == int(degree) and 1 <= degree <= igrf.NMAX):
+            raise SceneError(f"effects.{effect}.igrf_degree", f"an integer from 1 to {igrf.NMAX}", repr(degree))
+        blk = igrf.pack(date, nmax=int(degree))
+        meta["field"] = f"{igrf.GENERATION} degree {int(degree)} ({igrf.coefficient_file()} via ppigrf), coefficients at {date.isoformat()}"
     else:
         meta["field"] = "tilted dipole (IGRF-13 2020 axis)"
     angle, how = earth_orientation.rotation_angle_at_start(params, ctx, effect)

@@ -18,6 +18,7 @@ Reference: paper section 5 (constant current, dipole aligned with the rotation a
 | current | A | yes | current along every tether, > 0 from ``from`` to ``to`` |
 | field | choice | no ("aligned") | "aligned": dipole along -z (rotation axis); "tilted": IGRF-13 2020 dipole axis, rotating with the Earth; "igrf14": IGRF-14 to degree 13 at the scene's epoch (environment/igrf.py) |
 | dipole_strength | T m3 | no (IGRF-13 2020, 7.71e15 T m3) | |K| = mu_0 m / (4 pi) of the dipole (dipole fields only) |
+| igrf_degree | 1 | no (13) | "igrf14" only: truncation degree 1..13 (1 = the IGRF dipole of the epoch) |
 | greenwich_angle | rad | no | Earth-fixed fields: angle of the Greenwich meridian from the inertial x axis at t = 0; if given it wins over the epoch's Earth rotation angle (environment/earth_orientation.py); without it and without an epoch, 0 |
 | eclipse | choice | no ("none") | "cylindrical" or "conical": the current times the sunlit fraction (needs the epoch: Sun from DE421) |
 """
@@ -42,6 +43,8 @@ FIELD_PARAMS = {
                        doc="geomagnetic field model"),
     "dipole_strength": ParamSpec("T m3", required=False, default=magnetic.IGRF13_DIPOLE_T_M3,
                                  doc="|K| = mu_0 m / (4 pi); default IGRF-13 2020 (dipole fields)"),
+    "igrf_degree": ParamSpec("", required=False, default=13.0,
+                             doc="igrf14 only: truncation degree, an integer 1..13 (default 13)"),
     "greenwich_angle": ParamSpec("rad", required=False, default=None,
                                  doc="Earth rotation angle at t = 0 (override of the epoch's ERA)"),
     "eclipse": ParamSpec("", required=False, default="none", choices=tuple(eclipse.ECLIPSE_CODES),
