@@ -217,8 +217,15 @@ def test_rotating_the_initial_state_rotates_the_trajectory(kind, n, euler, theta
     size = np.linalg.norm(Y.reshape(len(t_out), -1, 3), axis=2).max(axis=0)  # each vector's size
     # measured: 1e-14 of the orbit radius for r0 and ~4e-9 of the rod size for d_i over 1000 s
     # (round-off of the 7400 km positions, amplified by the tether's dynamics); an anisotropic
-    # term would show at O(1)
-    assert (diff.max(axis=(0, 2)) <= 1e-7 * size).all()
+    # term would show at O(1).  Velocities are measured against their position's size over the
+    # step: a position difference dx carried by a mode of frequency w shows as w dx in the
+    # velocity, and a fixed-step explicit run that stays stable resolves only w h < 3.3 (DOP853's
+    # stability interval), so |dv| <= 3.3 dx / h.  (Against the velocity's own size the bound
+    # failed for a rod with a 0.5 rad kink: 1e-7 m/s on a 0.1 m/s rod rate, its lateral mode
+    # being ~100x the orbital rate.)
+    nb = size.size // 2
+    bound = 1e-7 * np.concatenate([size[:nb], size[:nb] * 3.3 / 0.5])
+    assert (diff.max(axis=(0, 2)) <= bound).all()
 
 
 # ------------------------------------------------------------------------------------------------
