@@ -256,6 +256,18 @@ def _hard_cases_gates(outdir: Path) -> dict:
     }
 
 
+def _rigid_bodies_gates(outdir: Path) -> dict:
+    """Gates of studies/rigid_bodies.py (issue 10; bounds in docs/rigid-oracles.md section 7).
+    A part the build cannot run (no rigid bodies) leaves its gates None: "not measured"."""
+    g = json.loads((outdir / "rigid_bodies_summary.json").read_text())["gates"]
+    return {
+        "hub_spoke_centre_tip_over_bound": g.get("hub_spoke_centre_tip_over_bound"),
+        "hub_spoke_centre_tension_over_bound": g.get("hub_spoke_centre_tension_over_bound"),
+        "hub_spoke_centre_order_deficit": g.get("hub_spoke_centre_order_deficit"),
+        "hub_spoke_centre_negative_control": g.get("hub_spoke_centre_negative_control"),
+    }
+
+
 #: (title, study script in studies/, its arguments after OUTDIR, markdown it writes, gate reader)
 STUDIES = [
     ("Catenary against Irvine's elastic catenary (paper section 4.2)", "catenary", [], "catenary.md", _catenary_gates),
@@ -266,6 +278,8 @@ STUDIES = [
     ("Rod-count convergence", "convergence", ["--quiet"], "convergence.md", None),
     ("What accuracy costs in time (work-precision)", "workprecision", ["--quiet"], "work_precision.md", None),
     ("Hard cases", "hard_cases", ["--quiet"], "hard_cases.md", _hard_cases_gates),
+    ("Rigid bodies, wheels and hub-and-spoke against the oracles (issue 10)", "rigid_bodies", ["--quiet"],
+     "rigid_bodies.md", _rigid_bodies_gates),
 ]
 
 

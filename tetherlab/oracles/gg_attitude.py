@@ -3,7 +3,7 @@
 An oracle for tetherlab's rigid bodies in orbit (issue 10, oracle 2).  numpy and scipy only.
 Derivation: docs/rigid-oracles.md, section 2.
 
-Orbit frame (LVLH, Hughes 1986 ch. 9; Wie 2008 sect. 7.? "gravity-gradient stabilization"):
+Orbit frame (LVLH, as docs/scenes.md; Hughes 1986 ch. 8-9; Wie 2008, gravity-gradient stabilization):
 o3 = nadir (-r/|r|), o2 = minus the orbit normal (-h/|h|), o1 = o2 x o3 (along-track: the
 velocity direction on a circular orbit).  Body principal axes x, y, z are aligned with o1, o2, o3
 at the relative equilibrium; roll phi about x, pitch theta about y, yaw psi about z; moments
@@ -21,9 +21,10 @@ frequencies W = w/n solve the characteristic quartic
 
     W^4 - (1 + 3 k1 + k1 k3) W^2 + 4 k1 k3 = 0
 
-(Hughes, Spacecraft Attitude Dynamics, 1986, ch. 9, sect. 9.? ; Kaplan, Modern Spacecraft
-Dynamics and Control, 1976, sect. 5.?: the same equations; docs/rigid-oracles.md gives the
-derivation we checked the convention with).  Linear stability: pitch Ix > Iz; roll-yaw
+(Hughes, Spacecraft Attitude Dynamics, 1986, ch. 9; Kaplan, Modern Spacecraft Dynamics and
+Control, 1976; Wie, Space Vehicle Dynamics and Control, 2008: the same equations -- their
+equation numbers could not be checked offline, so docs/rigid-oracles.md 2.2 derives them, and
+that derivation, with its axis convention, is the source).  Linear stability: pitch Ix > Iz; roll-yaw
 k1 k3 > 0, 1 + 3 k1 + k1 k3 > 0, (1 + 3 k1 + k1 k3)^2 > 16 k1 k3 (all three for two real positive
 roots W^2).
 
