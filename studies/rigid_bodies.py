@@ -113,6 +113,34 @@ def _hub_tension(ts, tether: str) -> np.ndarray:
     return ts[f"{tether}.joint0.reaction_N"].to_numpy()
 
 
+class kernel_defect:
+    """Context manager: every run prepared inside it carries the kernel's deliberate defect
+    ``name`` (tetherlab.kernel.layout.DEFECT_*, negative controls only; a scene cannot ask for
+    one).  Implemented by wrapping tetherlab.pipeline.prepare, so the defect cannot leak out."""
+
+    def __init__(self, name: str):
+        self.name = name
+
+    def __enter__(self):
+        import tetherlab.pipeline as P
+        from tetherlab.kernel import layout as L
+
+        self._P, self._orig = P, P.prepare
+        code = getattr(L, self.name)
+
+        def prepare_with_defect(scene, *a, **k):
+            prep = self._orig(scene, *a, **k)
+            prep.model.p[L.H_DEFECT] = code
+            return prep
+
+        P.prepare = prepare_with_defect
+        return self
+
+    def __exit__(self, *exc):
+        self._P.prepare = self._orig
+        return False
+
+
 def hub_run(ref: dict, case: str, rods: int, **kw) -> dict:
     """Simulate one hub-and-spoke case and measure it against the continuum oracle."""
     from tetherlab.pipeline import simulate
@@ -166,6 +194,22 @@ def part_hub(ref: dict, case: str, rods=(2, 4, 8)) -> tuple[list, dict]:
     ctrl = [hub_run(ref, case, n, EA_scale=1.01) for n in rods]
     order_ctrl = observed_order([r["rods"] for r in ctrl], [r["tip_radius_error_m"] for r in ctrl])
     g = f"hub_spoke_{case}"
+    defect_rows = []
+    if case == "radius":
+        # the kernel's deliberate defects must fail the bounds at n = 4 (a crash fails too)
+        from tetherlab.pipeline import SimulationError
+
+        for name in ("DEFECT_UNROTATED_ATTACHMENT", "DEFECT_NO_CENTRIPETAL"):
+            try:
+                with kernel_defect(name):
+                    r = hub_run(ref, case, 4)
+                over = max(r["tip_radius_error_m"] / r["tip_bound_m"], r["hub_tension_error_N"] / r["tension_bound_N"])
+            except (SimulationError, ValueError) as exc:  # a broken model may stop the run
+                r = {"case": case, "rods": 4, "EA_scale": 1.0, "stopped": f"{type(exc).__name__}: {str(exc)[:80]}"}
+                over = math.inf
+            r["case"] += f" (negative control: {name})"
+            r["over_bound"] = over
+            defect_rows.append(r)
     gates = {
         f"{g}_tip_over_bound": max(r["tip_radius_error_m"] / r["tip_bound_m"] for r in rows),
         f"{g}_tension_over_bound": max(r["hub_tension_error_N"] / r["tension_bound_N"] for r in rows),
@@ -176,7 +220,10 @@ def part_hub(ref: dict, case: str, rods=(2, 4, 8)) -> tuple[list, dict]:
     }
     for r in ctrl:
         r["case"] += " (negative control: EA x 1.01)"
-    return rows + ctrl, {**gates, f"{g}_order": order, f"{g}_order_control": order_ctrl}
+    if defect_rows:
+        # each defect must exceed the bound: the gate reads 1 / (smallest excess), <= 1 passes
+        gates[f"{g}_defects_negative_control"] = 1.0 / min(r["over_bound"] for r in defect_rows)
+    return rows + ctrl + defect_rows, {**gates, f"{g}_order": order, f"{g}_order_control": order_ctrl}
 
 
 # ==================================================================================================
@@ -396,13 +443,218 @@ def wheel_run(ref: dict, torque_N_m: float = 0.3, duration_s: float = 10.0) -> d
 
 
 def part_wheel(ref: dict) -> tuple[list, dict]:
+    r3 = wheels3_run()
     r = wheel_run(ref)
     c = ref["wheel_single_axis"]
     rate_bound = 4.0 * U * math.sqrt(r["steps"]) * (abs(c["w0_rad_s"]) + 10.0 * 0.3 / (c["J_kg_m2"] - c["Iw_kg_m2"])) * 4
     over = max(r["H_change_N_m_s"] / r["H_bound_N_m_s"], r["energy_minus_work_J"] / r["E_bound_J"],
                r["exchange_error_N_m_s"] / r["H_bound_N_m_s"], r["rate_error_rad_s"] / rate_bound)  # fmt: skip
     r["rate_bound_rad_s"] = rate_bound
-    return [r], {"wheel_exchange_over_bound": over}
+    over3 = max(r3["rate_error_rel"], r3["wheel_speed_error_rel"], r3["attitude_error_rad"], r3["H_change_rel"],
+                r3["energy_minus_work_rel"]) / r3["bound_rel"]  # fmt: skip
+    return [r, r3], {"wheel_exchange_over_bound": over, "wheels_tumbling_over_bound": over3}
+
+
+def wheels3_scene(*, rtol=1e-12, duration_s=30.0, count=61, torques=(0.02, -0.03, 0.01)) -> dict:
+    """A tumbling body (full inertia tensor) with three wheels at different speeds and constant
+    motor torques: against the gyrostat equations integrated by scipy (wheel_exchange)."""
+    J = WHEELS3["inertia"]
+    ent = {"xx": J[0][0], "yy": J[1][1], "zz": J[2][2], "xy": J[0][1], "xz": J[0][2], "yz": J[1][2]}
+    wheels = {}
+    for k, (ax, Iw, Om, M) in enumerate(zip(WHEELS3["axes"], WHEELS3["Iw"], WHEELS3["Omega0"], torques)):
+        wheels[f"w{k}"] = {"axis": list(ax), "inertia": _q(Iw, "kg m2"), "speed": _q(Om, "rad/s"), "torque": _q(M, "N m")}
+    return {
+        "name": "oracle-three-wheels", "duration": _q(duration_s, "s"), "effects": {},
+        "bodies": {"body": {
+            "mass": "100 kg", "position": _vec([0, 0, 0], "m"), "velocity": _vec([0, 0, 0], "m/s"),
+            "rigid": {"inertia": {k: _q(v, "kg m2") for k, v in ent.items()},
+                      "attitude": {"quaternion": list(WHEELS3["q0"]), "frame": "inertial"},
+                      "angular_velocity": {"vector": _vec(WHEELS3["w0"], "rad/s"), "frame": "body"}},
+            "wheels": wheels}},
+        "integrator": {"method": "dop853", "rtol": rtol, "atol": rtol},
+        "output": {"count": count},
+    }  # fmt: skip
+
+
+#: the three-wheel case: a full inertia tensor (tensor entries, docs/scenes.md), wheels on skewed axes
+WHEELS3 = {
+    "inertia": [[8.0, -0.3, 0.2], [-0.3, 10.0, -0.4], [0.2, -0.4, 12.0]],
+    "axes": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.6, 0.8]],
+    "Iw": [0.05, 0.05, 0.08], "Omega0": [100.0, -50.0, 30.0],
+    "w0": [0.05, -0.1, 0.2], "q0": [0.9, 0.1, -0.3, 0.3],
+}
+
+
+def wheels3_run(torques=(0.02, -0.03, 0.01), duration_s=30.0) -> dict:
+    from tetherlab.pipeline import simulate
+    from tetherlab.scene import Scene
+
+    res = simulate(Scene.from_dict(wheels3_scene(torques=torques, duration_s=duration_s)), progress=False)
+    ts, dg = res.timeseries, res.diagnostics
+    t = ts["t_s"].to_numpy()
+    q0 = np.asarray(WHEELS3["q0"]) / np.linalg.norm(WHEELS3["q0"])
+    r = we.integrate_gyrostat(WHEELS3["inertia"], WHEELS3["axes"], WHEELS3["Iw"], WHEELS3["w0"], WHEELS3["Omega0"],
+                              tf.quat_to_matrix(q0), t, lambda *_: list(torques))  # fmt: skip
+    w = _rates(ts, "body")
+    Om = ts[[f"body.w{k}.speed_rad_s" for k in range(3)]].to_numpy()
+    C = _attitude_rows(ts, "body")
+    H = dg[[f"angmom_{a}_kg_m2_s" for a in "xyz"]].to_numpy()
+    E = dg["kinetic_J"].to_numpy()
+    N = res.stats["n_accepted"]
+    # tolerance-proportional bound (integration_bound: the motion is a tumbling, periods ~ t w / 2 pi)
+    periods = float(t[-1] * np.abs(WHEELS3["w0"]).max() / (2 * math.pi))
+    B = integration_bound(1e-12, N, periods)
+    Hs = float(np.linalg.norm(r["H_inertial"][0]))
+    return {"case": f"tumbling body, 3 wheels, torques {list(torques)} N m",
+            "rate_error_rel": float(np.abs(w - r["w"]).max() / np.abs(r["w"]).max()),
+            "wheel_speed_error_rel": float(np.abs(Om - r["Omega"]).max() / np.abs(r["Omega"]).max()),
+            "attitude_error_rad": float(tf.rotation_angle(C, r["C"]).max()),
+            "H_change_rel": float(np.abs(H - H[0]).max() / Hs),
+            "energy_minus_work_rel": float(np.abs(E - E[0] - (r["energy"] - r["energy"][0])).max() / abs(r["energy"][0])),
+            "bound_rel": B, "steps": N, "wall_s": res.stats["wall_s"]}  # fmt: skip
+
+
+# ==================================================================================================
+# F: untethered bodies in one scene against single-body runs
+# ==================================================================================================
+FORMATION = {
+    # name: (position km, velocity km/s, rigid case of reference.json torque_free or None)
+    "r1": ([7000.0, 0.0, 0.0], [0.0, 7.546, 0.0], "major"),
+    "r2": ([0.0, 7100.0, 0.0], [-7.49, 0.0, 0.3], "minor"),
+    "p1": ([-6900.0, 100.0, 50.0], [0.1, -7.6, 0.2], None),
+}
+
+
+def formation_scene(ref: dict, names, *, duration_s=3000.0, rtol=1e-12, count=31) -> dict:
+    bodies = {}
+    for name in names:
+        r, v, case = FORMATION[name]
+        b = {"mass": "100 kg", "position": _vec(np.asarray(r) * 1e3, "m"), "velocity": _vec(np.asarray(v) * 1e3, "m/s")}
+        if case:
+            c = ref["torque_free"][case]
+            I = c["inertia_kg_m2"]
+            b["rigid"] = {"inertia": {"xx": _q(I[0], "kg m2"), "yy": _q(I[1], "kg m2"), "zz": _q(I[2], "kg m2")},
+                          "attitude": {"quaternion": list(c["q0"]), "frame": "inertial"},
+                          "angular_velocity": {"vector": _vec(c["w0_rad_s"], "rad/s"), "frame": "body"}}  # fmt: skip
+        bodies[name] = b
+    return {"name": "oracle-formation-" + "-".join(names), "duration": _q(duration_s, "s"),
+            "central_body": {"name": "earth"}, "effects": {"central_gravity": {}}, "bodies": bodies,
+            "integrator": {"method": "dop853", "rtol": rtol, "atol": rtol}, "output": {"count": count}}  # fmt: skip
+
+
+def part_formation(ref: dict) -> tuple[list, dict]:
+    from tetherlab.pipeline import simulate
+    from tetherlab.scene import Scene
+
+    names = list(FORMATION)
+    both = simulate(Scene.from_dict(formation_scene(ref, names)), progress=False)
+    rows, worst = [], 0.0
+    for name in names:
+        alone = simulate(Scene.from_dict(formation_scene(ref, [name])), progress=False)
+        cols = [f"{name}.{a}_m" for a in "xyz"]
+        dr = float(np.abs(both.timeseries[cols].to_numpy() - alone.timeseries[cols].to_numpy()).max())
+        rmag = float(np.linalg.norm(FORMATION[name][0]) * 1e3)
+        row = {"case": f"body {name}", "position_difference_m": dr}
+        rel = dr / rmag
+        if FORMATION[name][2]:
+            dw = float(np.abs(_rates(both.timeseries, name) - _rates(alone.timeseries, name)).max())
+            da = float(tf.rotation_angle(_attitude_rows(both.timeseries, name), _attitude_rows(alone.timeseries, name)).max())
+            wmax = float(np.abs(ref["torque_free"][FORMATION[name][2]]["w0_rad_s"]).max())
+            row.update(rate_difference_rad_s=dw, attitude_difference_rad=da)
+            rel = max(rel, dw / wmax, da)
+        # each run within integration_bound of the truth (orbital phase: k = orbits; attitude:
+        # periods), so the two within twice the larger bound
+        k = max(3000.0 / 5900.0, 3000.0 / 39.0)
+        B = 2.0 * integration_bound(1e-12, max(both.stats["n_accepted"], alone.stats["n_accepted"]), k)
+        row.update(relative_difference=rel, bound=B, steps_alone=alone.stats["n_accepted"],
+                   steps_together=both.stats["n_accepted"])  # fmt: skip
+        rows.append(row)
+        worst = max(worst, rel / B)
+    return rows, {"untethered_bodies_over_bound": worst}
+
+
+# ==================================================================================================
+# G: conservation with everything on (asymmetric tree, rigid bodies, offset attachments, wheels)
+# ==================================================================================================
+def tree_scene(*, rtol=1e-13, duration_s=200.0, count=201, model="energy", defect=None) -> dict:
+    """Free space: a rigid root with two spinning wheels (motors off) and a full inertia tensor;
+    tether t1 from an offset point of the root to an offset point of a rigid sub-body, t2 from the
+    sub-body to a point mass, t3 from the root to a point mass (an asymmetric tree); everything
+    turning about z at 0.05 rad/s, the root tumbling besides.  No damping, energy model: P, H and E
+    are exact invariants of the semi-discrete model."""
+    W = 0.05
+    pos = {"hub": [0.0, 0.0, 0.0], "sub": [21.1, 0.5, 0.5], "p1": [41.4, 0.5, 0.8], "p2": [-21.1, 0.0, 0.2]}
+    bodies = {}
+    for name, r in pos.items():
+        v = np.cross([0.0, 0.0, W], r)
+        bodies[name] = {"mass": _q({"hub": 200.0, "sub": 30.0, "p1": 5.0, "p2": 8.0}[name], "kg"),
+                        "position": _vec(r, "m"), "velocity": _vec(v, "m/s")}  # fmt: skip
+    bodies["hub"]["rigid"] = {
+        "inertia": {"xx": "60 kg m2", "yy": "80 kg m2", "zz": "100 kg m2", "xy": "-2 kg m2", "xz": "1 kg m2", "yz": "-3 kg m2"},
+        "attitude": {"quaternion": [1.0, 0.0, 0.0, 0.0], "frame": "inertial"},
+        "angular_velocity": {"vector": _vec([0.01, -0.02, W], "rad/s"), "frame": "body"}}
+    bodies["hub"]["wheels"] = {
+        "wa": {"axis": [1.0, 0.0, 0.0], "inertia": "0.05 kg m2", "speed": "200 rad/s"},
+        "wb": {"axis": [0.0, 0.6, 0.8], "inertia": "0.05 kg m2", "speed": "-150 rad/s"}}
+    bodies["sub"]["rigid"] = {
+        "inertia": {"xx": "3 kg m2", "yy": "4 kg m2", "zz": "5 kg m2"},
+        "attitude": {"quaternion": [1.0, 0.0, 0.0, 0.0], "frame": "inertial"},
+        "angular_velocity": {"vector": _vec([0.0, 0.0, W], "rad/s"), "frame": "body"}}
+    teth = dict(rods=3, length="20 m", EA="1e4 N", mass="0.5 kg", model=model)
+    tethers = {
+        "t1": {"from": "hub", "to": "sub", "from_point": _vec([1.0, 0.5, 0.0], "m"), "to_point": _vec([0.0, 0.0, -0.5], "m"), **teth},
+        "t2": {"from": "sub", "to": "p1", "from_point": _vec([0.2, 0.0, 0.3], "m"), **teth},
+        "t3": {"from": "hub", "to": "p2", "from_point": _vec([-1.0, 0.0, 0.2], "m"), **teth},
+    }  # fmt: skip
+    return {"name": "oracle-conservation-tree", "duration": _q(duration_s, "s"), "effects": {}, "bodies": bodies,
+            "tethers": tethers, "integrator": {"method": "dop853", "rtol": rtol, "atol": rtol},
+            "output": {"count": count}}  # fmt: skip
+
+
+def part_conservation() -> tuple[list, dict]:
+    """P, H (and E for the energy model) against round-off bounds derived as studies/hard_cases.py
+    derives its own: each step rounds every state component at relative u; P = sum m v moves by
+    <= u S_P (S_P = sum m |v|), H by (2/sqrt3) u S_H in standard deviation (S_H = sum m |r||v| plus
+    |J w| and the wheels' |h|), E by (1/sqrt3) u S_E (S_E = twice the kinetic plus elastic energy
+    scale); the invariants' errors add over N steps as a random walk, whose 4-sigma excursion is
+    B = 4 sqrt(N) x that.  The integration error of these exact invariants must have fallen below
+    round-off at rtol 1e-13 for the gate to pass."""
+    from tetherlab.pipeline import simulate
+    from tetherlab.scene import Scene
+
+    rows, worst = [], 0.0
+    for model in ("energy", "paper"):
+        res = simulate(Scene.from_dict(tree_scene(model=model)), progress=False)
+        ts, dg = res.timeseries, res.diagnostics
+        N = res.stats["n_accepted"]
+        P = dg[[f"momentum_{a}_N_s" for a in "xyz"]].to_numpy()
+        H = dg[[f"angmom_{a}_kg_m2_s" for a in "xyz"]].to_numpy()
+        E = dg["energy_J"].to_numpy()
+        masses = {"hub": 200.0, "sub": 30.0, "p1": 5.0, "p2": 8.0}
+        rmax = vmax = 0.0
+        S_P = S_H = 0.0
+        for name, m in masses.items():
+            r = np.linalg.norm(ts[[f"{name}.{a}_m" for a in "xyz"]].to_numpy(), axis=1)
+            v = np.linalg.norm(ts[[f"{name}.v{a}_m_s" for a in "xyz"]].to_numpy(), axis=1)
+            S_P += m * float(v.max())
+            S_H += m * float((r * v).max())
+            rmax, vmax = max(rmax, float(r.max())), max(vmax, float(v.max()))
+        S_P += 3 * 0.5 * vmax
+        S_H += 3 * 0.5 * rmax * vmax
+        # rotational: |J w| <= 120 kg m2 * |w|, wheels 0.05 * 200 + 0.05 * 150 (N m s)
+        S_H += 120.0 * 0.06 + 0.05 * 200.0 + 0.05 * 150.0
+        S_E = 2.0 * float(np.max(dg["kinetic_J"].to_numpy() + dg["elastic_J"].to_numpy()))
+        B_P = 4.0 * U * math.sqrt(N) * S_P
+        B_H = 4.0 * (2.0 / math.sqrt(3.0)) * U * math.sqrt(N) * S_H
+        B_E = 4.0 * (1.0 / math.sqrt(3.0)) * U * math.sqrt(N) * S_E
+        dP = float(np.linalg.norm(P - P[0], axis=1).max())
+        dH = float(np.linalg.norm(H - H[0], axis=1).max())
+        dE = float(np.abs(E - E[0]).max())
+        row = {"case": f"tree, {model} model", "dP_N_s": dP, "B_P": B_P, "dH_N_m_s": dH, "B_H": B_H,
+               "dE_J": dE, "B_E": B_E, "steps": N, "wall_s": res.stats["wall_s"]}  # fmt: skip
+        rows.append(row)
+        worst = max(worst, dP / B_P, dH / B_H, dE / B_E if model == "energy" else 0.0)
+    return rows, {"conservation_tree_over_bound": worst}
 
 
 # ==================================================================================================
@@ -410,7 +662,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir", type=Path)
     ap.add_argument("--quiet", action="store_true")
-    ap.add_argument("--parts", default="ABCDE")
+    ap.add_argument("--parts", default="ABCDEFG")
     args = ap.parse_args(argv)
     out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
@@ -422,7 +674,8 @@ def main(argv=None) -> int:
         gates.update(g)
     ok, why = rigid_available()
     for part, fn in (("B", lambda: part_hub(ref, "radius")), ("C", lambda: part_torque_free(ref)),
-                     ("D", lambda: part_gg(ref)), ("E", lambda: part_wheel(ref))):  # fmt: skip
+                     ("D", lambda: part_gg(ref)), ("E", lambda: part_wheel(ref)), ("F", lambda: part_formation(ref)),
+                     ("G", part_conservation)):  # fmt: skip
         if part not in args.parts:
             continue
         if not ok:
@@ -444,6 +697,8 @@ TITLES = {
     "C": "C. Torque-free rigid body (Jacobi elliptic closed form)",
     "D": "D. Gravity-gradient libration of a rigid satellite",
     "E": "E. Wheel momentum exchange",
+    "F": "F. Untethered bodies in one scene against single-body runs",
+    "G": "G. Conservation with everything on (tree, rigid bodies, offset attachments, wheels)",
 }
 
 
@@ -470,7 +725,7 @@ def write_report(out: Path, ref: dict, rows: dict, gates: dict, notes: dict) -> 
              "Oracles: tetherlab/oracles/{spinning_spokes, torque_free, gg_attitude, wheel_exchange}.py "
              "(numpy/scipy only; docs/rigid-oracles.md; references/rigid_bodies). Bounds: docs/rigid-oracles.md section 7.", ""]  # fmt: skip
     lines += ["Gate values:", "", *_table([{"gate": k, "value": v} for k, v in gates.items()]), ""]
-    for part in "ABCDE":
+    for part in "ABCDEFG":
         lines += [f"### {TITLES[part]}", ""]
         if part in notes:
             lines += [f"*{notes[part]}*", ""]

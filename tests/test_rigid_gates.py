@@ -23,6 +23,12 @@ _spec.loader.exec_module(study)
 
 REF = study.load_reference()
 
+# Parts B-G need tetherlab's rigid bodies (branch `rigid`, issue 10).  Until they are merged the
+# scene layer refuses a [bodies.NAME.rigid] table and these tests cannot run: they are SKIPPED,
+# which is not a pass.  Remove this marker once rigid bodies are in.
+_RIGID, _WHY = study.rigid_available()
+needs_rigid = pytest.mark.skipif(not _RIGID, reason=f"rigid bodies not available yet: {_WHY[:120]}")
+
 
 # -- A: hub and spoke at the centre of a point-mass hub (runs on point masses) ---------------------
 def test_hub_spoke_centre_two_rods_within_bound():
@@ -49,3 +55,91 @@ def test_hub_spoke_centre_gates():
     assert g["hub_spoke_centre_tension_over_bound"] <= 1.0
     assert g["hub_spoke_centre_order_deficit"] <= study.ORDER_SLACK
     assert g["hub_spoke_centre_negative_control"] <= 1.0  # the 1 % stiffer tether fails the order gate
+
+
+# -- B-G: rigid bodies (docs/scenes.md [bodies.NAME.rigid]) ------------------------------------------
+@needs_rigid
+def test_hub_spoke_rigid_hub_two_rods_within_bound():
+    # four tethers at r_h = 2 m on a rigid hub spinning with them: the continuum at the spin the
+    # run's angular momentum (hub's J w included) implies, within the first-order bound
+    r = study.hub_run(REF, "radius", 2)
+    assert r["tip_radius_error_m"] < r["tip_bound_m"]
+    assert r["hub_tension_error_N"] < r["tension_bound_N"]
+    assert r["hub_drift_m"] < 1e-9  # four symmetric pulls cancel (round-off of 100 m radii)
+    assert r["H_drift_rel"] < 1e-9  # damping is internal: H kept to the tolerance (rtol 1e-11)
+
+
+@needs_rigid
+@pytest.mark.slow
+def test_hub_spoke_rigid_hub_gates_and_defects():
+    rows, g = study.part_hub(REF, "radius")
+    assert g["hub_spoke_radius_tip_over_bound"] <= 1.0
+    assert g["hub_spoke_radius_tension_over_bound"] <= 1.0
+    assert g["hub_spoke_radius_order_deficit"] <= study.ORDER_SLACK
+    assert g["hub_spoke_radius_negative_control"] <= 1.0
+    # the kernel's deliberate defects (unrotated attachment, omega x (omega x r) dropped) fail
+    assert g["hub_spoke_radius_defects_negative_control"] <= 1.0
+
+
+@needs_rigid
+@pytest.mark.parametrize("case", ["major", "minor"])
+def test_torque_free_one_period(case):
+    # the closed form (torque_free.py, Landau & Lifshitz section 37) over one period, rtol 1e-12:
+    # within N rtol (1 + 2 pi k) (integration_bound, docs/rigid-oracles.md 7C)
+    r = study.torque_free_run(REF, case, periods=1.0, count=101)
+    assert r["rate_error_rel"] <= r["bound_rel"]
+    assert r["H_error_rel"] <= r["bound_rel"]
+    assert r["attitude_error_rad"] <= r["bound_rel"]
+
+
+@needs_rigid
+@pytest.mark.slow
+def test_torque_free_gate():
+    _, g = study.part_torque_free(REF)
+    assert g["torque_free_over_bound"] <= 1.0
+    assert g["torque_free_negative_control"] <= 1.0  # I2 x (1 + 1e-4) is seen
+
+
+@needs_rigid
+@pytest.mark.slow
+def test_gravity_gradient_libration_gate():
+    # pitch n sqrt(3 (Ix - Iz)/Iy) and the roll-yaw quartic's roots (gg_attitude.py, Hughes ch. 9)
+    _, g = study.part_gg(REF)
+    assert g["gg_libration_frequency"] <= 1e-5  # budget: docs/rigid-oracles.md 7D
+    assert g["gg_libration_negative_control"] <= 1.0
+
+
+@needs_rigid
+def test_wheel_single_axis_exchange():
+    # closed form (wheel_exchange.SingleAxis): w' = -M/(J - Iw), Omega' = J M/(Iw (J - Iw));
+    # round-off bounds (docs/rigid-oracles.md 7E)
+    r = study.wheel_run(REF, torque_N_m=0.3, duration_s=10.0)
+    assert r["transverse_rate_rad_s"] == 0.0  # spin about a principal axis stays exact
+    assert r["H_change_N_m_s"] <= r["H_bound_N_m_s"]
+    assert r["exchange_error_N_m_s"] <= r["H_bound_N_m_s"]
+    assert r["energy_minus_work_J"] <= r["E_bound_J"]
+    _, g = study.part_wheel(REF)
+    assert g["wheel_exchange_over_bound"] <= 1.0
+
+
+@needs_rigid
+def test_three_wheels_against_gyrostat():
+    # a tumbling body with three motorised wheels on skewed axes against the gyrostat equations
+    # integrated by scipy at rtol 1e-13 (wheel_exchange.integrate_gyrostat)
+    r = study.wheels3_run(duration_s=10.0)
+    for k in ("rate_error_rel", "wheel_speed_error_rel", "attitude_error_rad", "H_change_rel", "energy_minus_work_rel"):
+        assert r[k] <= r["bound_rel"], k
+
+
+@needs_rigid
+@pytest.mark.slow
+def test_untethered_bodies_match_single_body_runs():
+    _, g = study.part_formation(REF)
+    assert g["untethered_bodies_over_bound"] <= 1.0
+
+
+@needs_rigid
+@pytest.mark.slow
+def test_conservation_tree_everything_on():
+    _, g = study.part_conservation()
+    assert g["conservation_tree_over_bound"] <= 1.0
