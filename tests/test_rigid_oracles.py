@@ -82,6 +82,17 @@ def test_closed_form_against_dop853_and_period(w0, regime):
     assert np.max(np.abs(H - top.h_inertial)) < 1e-13 * top.h_N_m_s
 
 
+@pytest.mark.parametrize("w0, regime", CASES)
+def test_psi_closed_form_against_quadrature(w0, regime):
+    # psi by the elliptic integral of the third kind (Carlson R_F, R_J) against Gauss-Kronrod
+    # quadrature of psi' = H (I1 w1^2 + I2 w2^2)/(I1^2 w1^2 + I2^2 w2^2) (L&L section 37)
+    top = tf.euler_top(I_TOP, w0, C0)
+    t = np.linspace(0.0, 5.0 * top.period_s, 23)
+    a = tf.euler_angles_313(top, t, psi_method="closed")[:, 0]
+    b = tf.euler_angles_313(top, t, psi_method="quad")[:, 0]
+    assert np.max(np.abs(a - b)) < 1e-11  # rad, over psi growing to ~100 rad
+
+
 def test_torque_free_input_errors():
     with pytest.raises(ValueError, match="I1 < I2 < I3"):
         tf.euler_top((300.0, 200.0, 450.0), (0.1, 0.1, 0.1))

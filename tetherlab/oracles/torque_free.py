@@ -35,11 +35,12 @@ attitude written as C = N Rz(psi) Rx(theta) Rz(phi) (body -> inertial, a 3-1-3 s
     I1 w1 = H sin theta sin phi,  I2 w2 = H sin theta cos phi,  I3 w3 = H cos theta,
     psi' = H (I1 w1^2 + I2 w2^2) / (I1^2 w1^2 + I2^2 w2^2)
 
-(L&L section 37).  theta and phi are algebraic in the rates; psi is the integral of a periodic
-closed-form function (period P/2), evaluated here by adaptive Gauss-Kronrod quadrature
-(scipy.integrate.quad, one period stored) instead of L&L's closed form with the elliptic integral
-of the third kind.  :func:`integrate_reference` is a second, independent method (Euler's
-equations and the quaternion kinematics by scipy's DOP853 at rtol 1e-13).
+(L&L section 37).  theta and phi are algebraic in the rates; psi in closed form with the
+incomplete elliptic integral of the third kind (:func:`psi_closed_form`, Carlson's R_F and R_J
+from scipy.special), or by adaptive Gauss-Kronrod quadrature of psi' (scipy.integrate.quad, one
+period stored); the two agree to ~1e-13 rad.  :func:`integrate_reference` is a second,
+independent method (Euler's equations and the quaternion kinematics by scipy's DOP853 at rtol
+1e-13).
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.integrate import quad, solve_ivp
-from scipy.special import ellipj, ellipk, ellipkinc
+from scipy.special import elliprf, elliprj, ellipj, ellipk, ellipkinc
 
 MAJOR = "major"  # rotation about the axis of largest moment (H^2 > 2T I2)
 MINOR = "minor"  # rotation about the axis of smallest moment (H^2 < 2T I2)
@@ -189,20 +190,67 @@ def _quad_psi_rate(top: EulerTop, a: float, b: float) -> float:
     return float(val)
 
 
-def euler_angles_313(top: EulerTop, t_s) -> np.ndarray:
-    """(psi, theta, phi) (n, 3) in rad of C = N Rz(psi) Rx(theta) Rz(phi); psi unwrapped."""
+def euler_angles_313(top: EulerTop, t_s, psi_method: str = "closed") -> np.ndarray:
+    """(psi, theta, phi) (n, 3) in rad of C = N Rz(psi) Rx(theta) Rz(phi); psi unwrapped.
+
+    ``psi_method``: "closed" (elliptic integral of the third kind, :func:`psi_closed_form`) or
+    "quad" (Gauss-Kronrod quadrature of psi'); they agree to ~1e-13 rad (tested)."""
     t = np.atleast_1d(np.asarray(t_s, float))
     w = rates(top, t)
     I = np.array(top.inertia_kg_m2)
     hb = I * w  # body-frame angular momentum
     theta = np.arctan2(np.hypot(hb[:, 0], hb[:, 1]), hb[:, 2])
     phi = np.arctan2(hb[:, 0], hb[:, 1])
-    half = 0.5 * top.period_s
-    psi = np.empty_like(t)
-    for i, ti in enumerate(t):
-        k = math.floor(ti / half)
-        psi[i] = top.psi0 + k * top.dpsi_half_period + _quad_psi_rate(top, 0.0, ti - k * half)
+    if psi_method == "closed":
+        psi = psi_closed_form(top, t)
+    elif psi_method == "quad":
+        half = 0.5 * top.period_s
+        psi = np.empty_like(t)
+        for i, ti in enumerate(t):
+            k = math.floor(ti / half)
+            psi[i] = top.psi0 + k * top.dpsi_half_period + _quad_psi_rate(top, 0.0, ti - k * half)
+    else:
+        raise ValueError(f"psi_method: expected 'closed' or 'quad', got {psi_method!r}")
     return np.column_stack([psi, theta, phi])
+
+
+def _pi_incomplete(n: float, phi, m: float):
+    """Incomplete elliptic integral of the third kind Pi(n; phi | m) = int_0^phi dth /
+    ((1 - n sin^2 th) sqrt(1 - m sin^2 th)) for |phi| <= pi/2, by Carlson's symmetric forms
+    (DLMF 19.25.14): s R_F(c^2, 1 - m s^2, 1) + (n/3) s^3 R_J(c^2, 1 - m s^2, 1, 1 - n s^2)."""
+    sphi = np.sin(phi)
+    c2 = np.cos(phi) ** 2
+    d2 = 1.0 - m * sphi * sphi
+    return sphi * elliprf(c2, d2, 1.0) + (n / 3.0) * sphi**3 * elliprj(c2, d2, 1.0, 1.0 - n * sphi * sphi)
+
+
+def psi_closed_form(top: EulerTop, t_s) -> np.ndarray:
+    """psi(t) in closed form with the elliptic integral of the third kind (L&L section 37),
+    a second method for the quadrature of :func:`euler_angles_313` (docs/rigid-oracles.md 1.3).
+
+    psi' = H (2T - I3 w3^2)/(H^2 - I3^2 w3^2) = H/I3 + (H/I3)(2T I3 - H^2)/(A + B sn^2 u), with
+    I3^2 w3^2 = I3^2 a3^2 dn^2 u (major) or I3^2 a3^2 cn^2 u (minor), so A = H^2 - I3^2 a3^2 and
+    B = m I3^2 a3^2 (major) or I3^2 a3^2 (minor); int du/(A + B sn^2 u) = Pi(-B/A; am u | m)/A."""
+    t = np.atleast_1d(np.asarray(t_s, float))
+    I1, I2, I3 = top.inertia_kg_m2
+    h = top.h_N_m_s
+    a3 = top.amplitudes[2]
+    A = h * h - (I3 * a3) ** 2
+    B = (I3 * a3) ** 2 * (top.m if top.regime == MAJOR else 1.0)
+    nchar = -B / A
+    K, m = top.quarter_period_u, top.m
+    pic = elliprf(0.0, 1.0 - m, 1.0) + (nchar / 3.0) * elliprj(0.0, 1.0 - m, 1.0, 1.0 - nchar)
+
+    def big_pi(u):
+        # am(u + 2K) = am(u) + pi: reduce u to [-K, K), where |am| <= pi/2
+        k = np.floor((u + K) / (2.0 * K))
+        ur = u - 2.0 * k * K
+        phi = ellipj(ur, m)[3]
+        return 2.0 * k * pic + _pi_incomplete(nchar, phi, m)
+
+    u = top.lam_rad_s * t + top.u0
+    c = (h / I3) * (top.energy2_J * I3 - h * h) / (top.lam_rad_s * A)
+    return top.psi0 + (h / I3) * t + c * (big_pi(u) - big_pi(np.array([top.u0]))[0])
 
 
 def _rz(a):
@@ -215,9 +263,9 @@ def _rx(a):
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
-def attitude(top: EulerTop, t_s) -> np.ndarray:
+def attitude(top: EulerTop, t_s, psi_method: str = "closed") -> np.ndarray:
     """Attitude matrices (n, 3, 3), body -> inertial, at times t_s."""
-    ang = euler_angles_313(top, t_s)
+    ang = euler_angles_313(top, t_s, psi_method)
     return np.array([top.frame_h @ _rz(p) @ _rx(th) @ _rz(ph) for p, th, ph in ang])
 
 
