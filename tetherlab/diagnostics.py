@@ -17,16 +17,37 @@ import math
 import numpy as np
 
 from ._jit import njit
+from .bodies.rigid import gravity_gradient_potential, mat_t_vec, mat_vec
 from .kernel.effects import potential_per_mass
 from .kernel.layout import (
+    BS_ROT,
+    BS_R,
+    BS_SIZE,
+    BS_U,
+    BT_AOFF,
+    BT_JB,
+    BT_JS,
+    BT_M,
+    BT_NW,
+    BT_RIGID,
+    BT_SIZE,
+    BT_W0,
+    H_MU_GG,
+    H_NBODY,
     H_NQ,
+    H_NQT,
     H_NRODS,
     H_NTETH,
+    H_NWHEEL,
+    H_OFF_ATT,
+    H_OFF_BODY,
+    H_OFF_BSCR,
     H_OFF_QUAD,
     H_OFF_ROD,
     H_OFF_SCR,
     H_OFF_TETH,
-    H_ROOT_M,
+    H_OFF_WHL,
+    H_OFF_WT,
     RT_EA,
     RT_LU,
     RT_M,
@@ -36,65 +57,136 @@ from .kernel.layout import (
     SR_EPS,
     SR_FE,
     SR_SIZE,
+    TS_A,
+    TS_SIZE,
     TT_NRODS,
     TT_ROD0,
     TT_SIZE,
     TT_TENSION_ONLY,
-    TT_TIP_M,
+    WS_SAT,
+    WS_SIZE,
+    WS_TAU,
+    WT_AX,
+    WT_I,
+    WT_SIZE,
 )
-from .tether.chain import SQ3, accelerations
+from .tether.chain import SQ3, next_joint, system_accelerations
 
 # columns of the global diagnostics array
-G_PX, G_PY, G_PZ, G_HX, G_HY, G_HZ, G_KE, G_VG, G_VE, G_E = range(10)
-G_NCOL = 10
+G_PX, G_PY, G_PZ, G_HX, G_HY, G_HZ, G_KE, G_VG, G_VE, G_E, G_KROT = range(11)
+G_NCOL = 11
 
 
 @njit(cache=True)
-def evaluate_rows(ts, Y, p, glob, rods, joints, acc):
-    """Fill ``glob`` (rows x G_NCOL), ``rods`` (rows x nrods x 2: strain, axial force) and
-    ``joints`` (rows x njoints x 3: reaction vectors J_k) for every state row of Y.
+def evaluate_rows(ts, Y, p, glob, rods, joints, acc, datt, ctrl, wheels):
+    """Fill ``glob`` (rows x G_NCOL), ``rods`` (rows x nrods x 2: strain, axial force),
+    ``joints`` (rows x njoints x 3: reaction vectors J_k), ``ctrl`` (rows x nbody x 3: commanded
+    control torque, body axes) and ``wheels`` (rows x nwheel x 2: motor torque, saturation flag)
+    for every state row of Y.  Rigid bodies add J omega + R h_w to the angular momentum and
+    1/2 w.J_s w + sum h_k^2/(2 I_k) to the kinetic energy (docs/model.md 12; also in G_KROT), the
+    gravity-gradient (MacCullagh) term to the potential.
 
     Returns the index of the first row whose right-hand side failed, or -1.
     """
     nrows = Y.shape[0]
-    n = Y.shape[1]
-    h = n // 2
+    h = int(p[H_NQT])
     nrods = int(p[H_NRODS])
     nteth = int(p[H_NTETH])
+    nbody = int(p[H_NBODY])
     offr = int(p[H_OFF_ROD])
     offt = int(p[H_OFF_TETH])
+    offb = int(p[H_OFF_BODY])
+    bscr = int(p[H_OFF_BSCR])
+    tscr = bscr + nbody * BS_SIZE
+    wscr = tscr + nteth * TS_SIZE
+    offw = int(p[H_OFF_WT])
+    nwh = int(p[H_NWHEEL])
+    oatt = int(p[H_OFF_ATT])
+    whl = int(p[H_OFF_WHL]) - oatt
     scr = int(p[H_OFF_SCR])
     offq = int(p[H_OFF_QUAD])
     nq = int(p[H_NQ])
     jscr = scr + nrods * SR_SIZE
-    m0 = p[H_ROOT_M]
+    mu_gg = p[H_MU_GG]
     for row in range(nrows):
         t = ts[row]
         q = Y[row, :h]
-        qd = Y[row, h:]
-        code = accelerations(t, q, qd, p, acc)
+        qd = Y[row, h : 2 * h]
+        att = Y[row, 2 * h :]
+        code = system_accelerations(t, q, qd, att, p, acc, datt)
         if code != 0:
             return row
-        px = m0 * qd[0]
-        py = m0 * qd[1]
-        pz = m0 * qd[2]
-        hx = m0 * (q[1] * qd[2] - q[2] * qd[1])
-        hy = m0 * (q[2] * qd[0] - q[0] * qd[2])
-        hz = m0 * (q[0] * qd[1] - q[1] * qd[0])
-        ke = 0.5 * m0 * (qd[0] ** 2 + qd[1] ** 2 + qd[2] ** 2)
-        vg = m0 * potential_per_mass(p, t, q[0], q[1], q[2]) if m0 > 0.0 else 0.0
+        px = 0.0
+        py = 0.0
+        pz = 0.0
+        hx = 0.0
+        hy = 0.0
+        hz = 0.0
+        ke = 0.0
+        krot = 0.0
+        vg = 0.0
         ve = 0.0
+        for b in range(nbody):
+            bt = offb + b * BT_SIZE
+            m = p[bt + BT_M]
+            if not m > 0.0:
+                continue
+            bs = bscr + b * BS_SIZE
+            rx = p[bs + BS_R]
+            ry = p[bs + BS_R + 1]
+            rz = p[bs + BS_R + 2]
+            vx = p[bs + BS_R + 3]
+            vy = p[bs + BS_R + 4]
+            vz = p[bs + BS_R + 5]
+            px += m * vx
+            py += m * vy
+            pz += m * vz
+            hx += m * (ry * vz - rz * vy)
+            hy += m * (rz * vx - rx * vz)
+            hz += m * (rx * vy - ry * vx)
+            ke += 0.5 * m * (vx * vx + vy * vy + vz * vz)
+            vg += m * potential_per_mass(p, t, rx, ry, rz)
+            for j in range(3):
+                ctrl[row, b, j] = p[bs + BS_U + j]
+            if p[bt + BT_RIGID] == 0.0:
+                continue
+            ao = int(p[bt + BT_AOFF]) - oatt
+            wx = att[ao + 4]
+            wy = att[ao + 5]
+            wz = att[ao + 6]
+            jx, jy, jz = mat_vec(p, bt + BT_JS, wx, wy, wz)
+            er = 0.5 * (wx * jx + wy * jy + wz * jz)
+            w0 = int(p[bt + BT_W0])
+            for k in range(w0, w0 + int(p[bt + BT_NW])):
+                wt = offw + k * WT_SIZE
+                hk = att[whl + k]
+                jx += p[wt + WT_AX] * hk
+                jy += p[wt + WT_AX + 1] * hk
+                jz += p[wt + WT_AX + 2] * hk
+                er += 0.5 * hk * hk / p[wt + WT_I]
+            lx, ly, lz = mat_vec(p, bs + BS_ROT, jx, jy, jz)
+            hx += lx
+            hy += ly
+            hz += lz
+            ke += er
+            krot += er
+            if mu_gg > 0.0:
+                rbx, rby, rbz = mat_t_vec(p, bs + BS_ROT, rx, ry, rz)
+                vg += gravity_gradient_potential(p, bt + BT_JB, mu_gg, rbx, rby, rbz)
+        for k in range(nwh):
+            wheels[row, k, 0] = p[wscr + k * WS_SIZE + WS_TAU]
+            wheels[row, k, 1] = p[wscr + k * WS_SIZE + WS_SAT]
         for k in range(nteth):
             tb = offt + k * TT_SIZE
+            ts_ = tscr + k * TS_SIZE
             nk = int(p[tb + TT_NRODS])
             g0 = int(p[tb + TT_ROD0])
-            mf = p[tb + TT_TIP_M]
-            ax = q[0]
-            ay = q[1]
-            az = q[2]
-            avx = qd[0]
-            avy = qd[1]
-            avz = qd[2]
+            ax = p[ts_ + TS_A]
+            ay = p[ts_ + TS_A + 1]
+            az = p[ts_ + TS_A + 2]
+            avx = p[ts_ + TS_A + 3]
+            avy = p[ts_ + TS_A + 4]
+            avz = p[ts_ + TS_A + 5]
             for g in range(g0, g0 + nk):
                 rb = offr + g * RT_SIZE
                 m = p[rb + RT_M]
@@ -130,21 +222,7 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc):
                     ve += 0.5 * p[rb + RT_EA] * p[rb + RT_LU] * eps * eps
                 rods[row, g, 0] = eps
                 rods[row, g, 1] = p[scr + g * SR_SIZE + SR_FE]
-                ax += 2.0 * SQ3 * dx
-                ay += 2.0 * SQ3 * dy
-                az += 2.0 * SQ3 * dz
-                avx += 2.0 * SQ3 * ddx
-                avy += 2.0 * SQ3 * ddy
-                avz += 2.0 * SQ3 * ddz
-            if mf > 0.0:
-                px += mf * avx
-                py += mf * avy
-                pz += mf * avz
-                hx += mf * (ay * avz - az * avy)
-                hy += mf * (az * avx - ax * avz)
-                hz += mf * (ax * avy - ay * avx)
-                ke += 0.5 * mf * (avx**2 + avy**2 + avz**2)
-                vg += mf * potential_per_mass(p, t, ax, ay, az)
+                ax, ay, az, avx, avy, avz = next_joint(q, qd, g, ax, ay, az, avx, avy, avz)
             for j in range(nk + 1):
                 jb = jscr + (g0 + k + j) * SJ_SIZE + SJ_J
                 joints[row, g0 + k + j, 0] = p[jb]
@@ -160,6 +238,7 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc):
         glob[row, G_VG] = vg
         glob[row, G_VE] = ve
         glob[row, G_E] = ke + vg + ve
+        glob[row, G_KROT] = krot
     return -1
 
 
@@ -169,15 +248,22 @@ def compute(model, ts: np.ndarray, Y: np.ndarray) -> dict:
     nrows = Y.shape[0]
     nr = model.n_rods
     nj = nr + len(model.tethers)
+    nb = len(model.bodies)
+    nw = int(p[H_NWHEEL])
     glob = np.full((nrows, G_NCOL), np.nan)
     rods = np.full((nrows, nr, 2), np.nan)
     joints = np.full((nrows, nj, 3), np.nan)
-    acc = np.zeros(Y.shape[1] // 2)
+    ctrl = np.full((nrows, nb, 3), np.nan)
+    wheels = np.full((nrows, nw, 2), np.nan)
+    nqt = model.n_qt
+    acc = np.zeros(nqt)
+    datt = np.zeros(Y.shape[1] - 2 * nqt)
     if nrows:
         evaluate_rows(
-            np.ascontiguousarray(ts, float), np.ascontiguousarray(Y, float), p, glob, rods, joints, acc
+            np.ascontiguousarray(ts, float), np.ascontiguousarray(Y, float), p, glob, rods, joints, acc, datt,
+            ctrl, wheels,
         )
-    return {"global": glob, "rods": rods, "joints": joints}
+    return {"global": glob, "rods": rods, "joints": joints, "control": ctrl, "wheels": wheels}
 
 
 def orbital_frame(r: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -259,11 +345,21 @@ def internal_angular_momentum_scale(model, y) -> float:
     pts = point_positions(model, y)
     rc, vc = center_of_mass(model, y)
     mr = model.rod_masses()
-    items = [(model.root_mass_kg, pts["r0"], pts["v0"])]
-    for k, t in enumerate(model.tethers):
-        if t.tip_mass_kg > 0:
-            items.append((t.tip_mass_kg, pts["joints"][k][-1], pts["jvel"][k][-1]))
+    items = [
+        (b.mass_kg, pts["bodies"][i, :3], pts["bodies"][i, 3:])
+        for i, b in enumerate(model.bodies)
+        if b.name and b.mass_kg > 0 and not b.fixed
+    ]
+    spin = 0.0  # rigid bodies: |J_s omega + h_w| (their own angular momentum about G)
+    for b, off in model.rigid_index.items():
+        rs = model.bodies[b].rigid
+        w = np.asarray(y[off + 4 : off + 7], float)
+        js = np.asarray(rs.inertia_kg_m2, float) - sum(
+            (wh.inertia_kg_m2 * np.outer(wh.axis, wh.axis) for wh in rs.wheels), np.zeros((3, 3))
+        )
+        hw = sum((np.asarray(wh.axis) * y[model.wheel_index[(b, wh.name)]] for wh in rs.wheels), np.zeros(3))
+        spin += float(np.linalg.norm(js @ w + hw))
     for i in range(model.n_rods):
         for s in (-1.0, 1.0):
             items.append((0.5 * mr[i], pts["rG"][i] + s * pts["d"][i], pts["vG"][i] + s * pts["dd"][i]))
-    return float(sum(m * np.linalg.norm(np.cross(r - rc, v - vc)) for m, r, v in items))
+    return spin + float(sum(m * np.linalg.norm(np.cross(r - rc, v - vc)) for m, r, v in items))

@@ -22,8 +22,12 @@ from .kernel.layout import FAIL_TEXT, H_EV_STOP_R, H_FAIL_CODE, H_FAIL_ROD, H_FA
 from .orbits.kepler import elements_to_cartesian
 from .result import Result
 from .system import (
+    BodySpec,
+    ControlSpec,
     Model,
+    RigidSpec,
     TetherSpec,
+    WheelSpec,
     build_model,
     center_of_mass,
     chain_state,
@@ -75,53 +79,132 @@ def _state_of(entity, mu: float):
     return None
 
 
-def _topology(scene):
-    """Root body and the tethers hanging from it (a tether between two point masses, or hub and
-    spoke).  Other graphs are refused with a clear error until their solver exists."""
-    bodies = [b.name for b in scene.bodies]
+@dataclass
+class Topology:
+    """The scene's graph as the kernel runs it (docs/scenes.md, "Body order in the kernel").
+
+    ``bodies``: BodySpec in kernel order (0 the first root, 1 + k the child end of tether k, then
+    the other roots); ``parents[k]``/``children[k]``: the body names at tether k's root side and
+    far end; ``reversed[k]``: the scene writes tether k child -> parent.  ``simple``: a star of
+    point masses around body 0 written from it (the original layout code applies, bit for bit).
+    """
+
+    bodies: list
+    tethers: list
+    parents: list
+    children: list
+    reversed: list
+    roots: list
+    simple: bool
+
+
+def _topology(scene) -> Topology:
+    """The forest of the scene (validated at load: no loops, attachments on rigid bodies only).
+
+    The root of each connected component is its fixed body, else the `from` body of its first
+    tether in file order, else (no tether) the body itself.  Tethers keep file order; each is
+    oriented from its root side (reversed when the scene writes it the other way)."""
+    names = [b.name for b in scene.bodies]
     tethers = list(scene.tethers)
-    if not tethers:
-        if len(bodies) != 1:
+    adj: dict[str, list] = {n: [] for n in names}
+    for k, t in enumerate(tethers):
+        adj[t.from_body].append((k, t.to_body))
+        adj[t.to_body].append((k, t.from_body))
+    comp: dict[str, int] = {}
+    members: list[list[str]] = []
+    for n in names:
+        if n in comp:
+            continue
+        stack = [n]
+        comp[n] = len(members)
+        group = []
+        while stack:
+            x = stack.pop()
+            group.append(x)
+            for _, y in adj[x]:
+                if y not in comp:
+                    comp[y] = comp[n]
+                    stack.append(y)
+        members.append(group)
+    roots = []
+    for c, group in enumerate(members):
+        fixed = [b.name for b in scene.bodies if b.name in group and b.fixed]
+        if len(fixed) > 1:
             raise SceneError(
-                "bodies", "exactly one body when the scene has no tether", f"{len(bodies)} bodies"
+                f"bodies.{fixed[1]}.fixed", "at most one fixed body in a group of bodies joined by tethers "
+                "(the kernel holds only the root of a tree at rest)", f"true on {fixed}",
             )
-        return bodies[0], []
-    roots = {t.from_body for t in tethers}
-    if len(roots) != 1:
-        raise SceneError(
-            "tethers",
-            "all tethers starting on the same root body (two point masses, or hub and spoke)",
-            f"tethers starting on {sorted(roots)}",
-        )
-    root = roots.pop()
-    tips = [t.to_body for t in tethers]
-    if root in tips or len(set(tips)) != len(tips):
-        raise SceneError(
-            "tethers", "tip bodies distinct from each other and from the root", f"tips {tips}, root {root!r}"
-        )
-    for name in tips:
-        if scene.body(name).fixed:
-            # the kernel holds only the root at rest (inv_m0 = 0); a fixed tip needs another solve
-            raise SceneError(
-                f"bodies.{name}.fixed", "false: only the root body (the tethers' 'from' end) may be fixed",
-                f"true on the tip body {name!r}",
-            )
-    unused = set(bodies) - {root} - set(tips)
-    if unused:
-        raise SceneError(
-            "bodies", "every body joined to the tether system", f"unconnected bodies {sorted(unused)}"
-        )
-    return root, tethers
+        first = next((t for t in tethers if t.from_body in group), None)
+        root = fixed[0] if fixed else (first.from_body if first is not None else next(n for n in names if n in group))
+        roots.append(root)
+    # orient every tether away from its component's root
+    parents = [None] * len(tethers)
+    children = [None] * len(tethers)
+    for root in roots:
+        stack = [root]
+        seen = {root}
+        while stack:
+            x = stack.pop()
+            for k, y in adj[x]:
+                if y in seen:
+                    continue
+                seen.add(y)
+                parents[k] = x
+                children[k] = y
+                stack.append(y)
+    rev = [parents[k] != t.from_body for k, t in enumerate(tethers)]
+    by_name = {b.name: b for b in scene.bodies}
+    root0 = roots[comp[names[0]]] if tethers or len(names) == 1 else roots[comp[names[0]]]
+    other_roots = [r for r in roots if r != root0]
+    order = [root0] + list(children) + other_roots
+    bodies = [_body_spec(by_name[n]) for n in order]
+    simple = (
+        not other_roots
+        and not any(rev)
+        and all(parents[k] == root0 for k in range(len(tethers)))
+        and all(b.rigid is None for b in scene.bodies)
+    )
+    return Topology(bodies, tethers, parents, children, rev, [root0] + other_roots, simple)
+
+
+def _body_spec(body) -> BodySpec:
+    r = body.rigid
+    if r is None:
+        return BodySpec(body.name, body.mass_kg, bool(body.fixed))
+    wheels = []
+    for w in r.wheels:
+        if isinstance(w.torque, str):
+            mode, tau, times, values = "control", 0.0, (), ()
+        elif isinstance(w.torque, tuple):
+            mode, tau, (times, values) = "table", 0.0, w.torque
+        else:
+            mode, tau, times, values = "constant", float(w.torque), (), ()
+        wheels.append(WheelSpec(
+            name=w.name, axis=tuple(w.axis), inertia_kg_m2=w.inertia_kg_m2, speed_rad_s=w.speed_rad_s,
+            max_speed_rad_s=w.max_speed_rad_s or 0.0, max_torque_N_m=w.max_torque_N_m or 0.0, mode=mode,
+            torque_N_m=tau, times_s=tuple(times), values_N_m=tuple(values),
+        ))  # fmt: skip
+    control = None
+    if r.control is not None:
+        c = r.control
+        control = ControlSpec(c.target, c.kp_N_m, c.kd_N_m_s, tuple(c.quaternion) if c.quaternion else (1.0, 0.0, 0.0, 0.0))
+    return BodySpec(body.name, body.mass_kg, bool(body.fixed), RigidSpec(r.inertia_kg_m2, tuple(wheels), control))
 
 
 def prepare(scene) -> Prepared:
     mu = scene.central_body.mu_m3_s2
     central = {"mu_m3_s2": mu, "radius_m": scene.central_body.radius_m}
     effects = [(effect_spec(e.name), e.params_si) for e in scene.effects]
-    root_name, tethers = _topology(scene)
+    topo = _topology(scene)
+    root_name = topo.roots[0]
+    tethers = topo.tethers
     root = scene.body(root_name)
-    specs = [
-        TetherSpec(
+    zero = (0.0, 0.0, 0.0)
+    specs = []
+    for k, t in enumerate(tethers):
+        a_pt = t.from_point_m or zero
+        b_pt = t.to_point_m or zero
+        specs.append(TetherSpec(
             name=t.name,
             rods=t.rods,
             length_m=t.length_m,
@@ -129,13 +212,15 @@ def prepare(scene) -> Prepared:
             mass_kg=t.mass_kg,
             damping_n_s=t.damping_N_s,
             model=t.model,
-            tip_mass_kg=scene.body(t.to_body).mass_kg,
-            tip_name=t.to_body,
+            tip_mass_kg=scene.body(topo.children[k]).mass_kg,
+            tip_name=topo.children[k],
             tension_only=t.tension_only,
             diameter_m=t.diameter_m,
-        )
-        for t in tethers
-    ]
+            parent=topo.parents[k],
+            from_point_m=tuple(b_pt if topo.reversed[k] else a_pt),
+            to_point_m=tuple(a_pt if topo.reversed[k] else b_pt),
+            reversed=topo.reversed[k],
+        ))  # fmt: skip
     nq = tethers[0].quadrature if tethers else 2
     if any(t.quadrature != nq for t in tethers):
         raise SceneError(
@@ -151,6 +236,7 @@ def prepare(scene) -> Prepared:
         root_name=root_name,
         epoch=scene.epoch,
         duration_s=_duration_hint(scene),
+        bodies=topo.bodies,
     )
     # The relative equilibrium is a rigid rotation under the conservative effects; a velocity-
     # dependent or time-dependent force (electrodynamic, drag, third bodies) has none, so the
@@ -165,8 +251,14 @@ def prepare(scene) -> Prepared:
             quadrature=nq,
             root_fixed=bool(getattr(root, "fixed", False)),
             root_name=root_name,
+            bodies=topo.bodies,
         )
-    y0, r_ref, v_ref, sides = _initial_state(scene, model, root_name, tethers, mu, eq_model)
+    if topo.simple:
+        y0, r_ref, v_ref, sides = _initial_state(scene, model, root_name, tethers, mu, eq_model)
+    else:
+        from .layout_forest import forest_state
+
+        y0, r_ref, v_ref, sides = forest_state(scene, model, topo, mu)
     holding = None
     if any(t.initial is not None and t.initial.shape == "equilibrium" for t in tethers):
         y0, holding = _static_start(scene, root, tethers, specs, effects, central, nq, y0)
@@ -293,6 +385,10 @@ def _formulation(scene, model: Model, tethers, y0: np.ndarray) -> str:
         raise SceneError(key, "'cowell' when [effects] does not name central_gravity (DROMO builds it in)", repr(name))
     if model.root_fixed:
         raise SceneError(key, "'cowell' for a scene whose root body is fixed (it has no orbit)", repr(name))
+    if model.has_attitude:
+        # DROMO's time form integrates the root's orbit in elements; the attitude and wheel blocks
+        # are not carried through its state conversion yet
+        raise SceneError(key, "'cowell' for a scene with rigid bodies (attitude and wheel states)", repr(name))
     if name == "dromo" and not tethers:
         if scene.integrator.max_step_s is not None:
             raise SceneError(
@@ -581,7 +677,10 @@ def _integrate_cowell(prep: Prepared, p: np.ndarray, progress):
         h_max=prep.h_max,
         max_steps=prep.max_steps,
         progress=progress,
-        second_order=True,  # Cowell: y = [q, q'], so RADAU5 can halve its Newton systems
+        # Cowell: y = [q, q', ...] with q' exact: RADAU5 halves its Newton systems.  Its reduced
+        # form needs n = 2 M1 (integrators/radau5.py), so a scene with an attitude block (first
+        # order, appended) runs the full Newton system: M1 = 0, correct but without the saving.
+        second_order=not prep.model.has_attitude,
         **_event_args(prep),
     )
 

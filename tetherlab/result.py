@@ -58,41 +58,57 @@ class Result:
         model = prep.model
         cols: dict[str, np.ndarray] = {"t_s": np.asarray(t, float)}
         nrows = len(t)
-        nr = model.n_rods
-        h = Y.shape[1] // 2 if nrows else 3 * (1 + nr)
-        root = model.root_name
-        for j, ax in enumerate("xyz"):
-            cols[f"{root}.{ax}_m"] = Y[:, j] if nrows else np.zeros(0)
-        for j, ax in enumerate("xyz"):
-            cols[f"{root}.v{ax}_m_s"] = Y[:, h + j] if nrows else np.zeros(0)
-        # tether nodes (A_1 = root ... B_n = tip) and tips
+        nb = len(model.bodies)
+        # every joint and body per row, from the compiled forest walk (tether/chain.py)
+        allj = np.full((nrows, model.n_rods + len(model.tethers), 6), np.nan)
+        bodies = np.full((nrows, nb, 6), np.nan)
+        rots = np.full((nrows, nb, 3, 3), np.nan)
+        for row in range(nrows):
+            pts = point_positions(model, Y[row])
+            bodies[row] = pts["bodies"]
+            rots[row] = pts["rotations"]
+            for k, sl in enumerate(model.rod_slices):
+                allj[row, sl.start + k : sl.stop + k + 1, :3] = pts["joints"][k]
+                allj[row, sl.start + k : sl.stop + k + 1, 3:] = pts["jvel"][k]
+        for b, body in enumerate(model.bodies):
+            if not body.name or (b > 0 and not body.mass_kg > 0 and not body.fixed):
+                continue
+            for j, ax in enumerate("xyz"):
+                cols[f"{body.name}.{ax}_m"] = bodies[:, b, j]
+            for j, ax in enumerate("xyz"):
+                cols[f"{body.name}.v{ax}_m_s"] = bodies[:, b, 3 + j]
+            if body.rigid is not None:
+                off = model.rigid_index[b]
+                qn = Y[:, off : off + 4] / np.linalg.norm(Y[:, off : off + 4], axis=1, keepdims=True) if nrows else np.zeros((0, 4))
+                for j, ax in enumerate("wxyz"):
+                    cols[f"{body.name}.q{ax}"] = qn[:, j]
+                for j, ax in enumerate("xyz"):
+                    cols[f"{body.name}.omega_{ax}_rad_s"] = Y[:, off + 4 + j]
+                for w in body.rigid.wheels:
+                    h = Y[:, model.wheel_index[(b, w.name)]]
+                    cols[f"{body.name}.{w.name}.speed_rad_s"] = h / w.inertia_kg_m2 - Y[:, off + 4 : off + 7] @ np.asarray(w.axis)
+                    cols[f"{body.name}.{w.name}.momentum_N_m_s"] = h
+        # tether nodes, rods and joints in the scene's order (from the `from` end), whatever the kernel's
         nodes = {}
-        for k, tet in enumerate(model.tethers):
-            nk = tet.rods
-            pos = np.full((nrows, nk + 1, 3), np.nan)
-            vel = np.full((nrows, nk + 1, 3), np.nan)
-            for row in range(nrows):
-                pts = point_positions(model, Y[row])
-                pos[row] = pts["joints"][k]
-                vel[row] = pts["jvel"][k]
-            nodes[tet.name] = (pos, vel)
-            if tet.tip_mass_kg > 0:
-                for j, ax in enumerate("xyz"):
-                    cols[f"{tet.tip_name}.{ax}_m"] = pos[:, -1, j]
-                for j, ax in enumerate("xyz"):
-                    cols[f"{tet.tip_name}.v{ax}_m_s"] = vel[:, -1, j]
         g_rod = 0
         g_joint = 0
         for k, tet in enumerate(model.tethers):
-            pos, _ = nodes[tet.name]
+            pos = allj[:, g_joint : g_joint + tet.rods + 1, :3]
+            rods = d["rods"][:, g_rod : g_rod + tet.rods]
+            jr = d["joints"][:, g_joint : g_joint + tet.rods + 1]
+            if tet.reversed:
+                pos = pos[:, ::-1]
+                rods = rods[:, ::-1]
+                jr = jr[:, ::-1]
+            nodes[tet.name] = pos
             for j in range(tet.rods + 1):
                 for a, ax in enumerate("xyz"):
                     cols[f"{tet.name}.node{j}.{ax}_m"] = pos[:, j, a]
             for i in range(tet.rods):
-                cols[f"{tet.name}.rod{i + 1}.strain"] = d["rods"][:, g_rod + i, 0]
-                cols[f"{tet.name}.rod{i + 1}.axial_force_N"] = d["rods"][:, g_rod + i, 1]
+                cols[f"{tet.name}.rod{i + 1}.strain"] = rods[:, i, 0]
+                cols[f"{tet.name}.rod{i + 1}.axial_force_N"] = rods[:, i, 1]
             for j in range(tet.rods + 1):
-                cols[f"{tet.name}.joint{j}.reaction_N"] = np.linalg.norm(d["joints"][:, g_joint + j, :], axis=1)
+                cols[f"{tet.name}.joint{j}.reaction_N"] = np.linalg.norm(jr[:, j, :], axis=1)
             g_rod += tet.rods
             g_joint += tet.rods + 1
         ts = pd.DataFrame(cols)
@@ -105,6 +121,9 @@ class Result:
             "elastic_J": g[:, diag.G_VE],
             "energy_J": g[:, diag.G_E],
         }
+        if model.rigid_index:
+            dcols["rotational_J"] = g[:, diag.G_KROT]
+        dcols.update(_rigid_diagnostics(model, Y, d, bodies, rots, nrows))
         for j, ax in enumerate("xyz"):
             dcols[f"momentum_{ax}_N_s"] = g[:, diag.G_PX + j]
         for j, ax in enumerate("xyz"):
@@ -127,7 +146,7 @@ class Result:
             # libration angles of each tether (root -> tip line) in the centre of mass's orbital frame
             rc, vc = _center_of_mass_rows(model, Y)
             for k, tet in enumerate(model.tethers):
-                pos, _ = nodes[tet.name]
+                pos = nodes[tet.name]
                 if np.linalg.norm(np.cross(rc[0], vc[0])) > 0:
                     th, ph = diag.libration_angles(rc, vc, pos[:, 0], pos[:, -1], prep.sides[k])
                 else:
@@ -189,6 +208,59 @@ def _json_default(o):
     if isinstance(o, np.ndarray):
         return o.tolist()
     return str(o)
+
+
+def _rigid_diagnostics(model, Y, d, bodies, rots, nrows) -> dict:
+    """Per rigid body: roll/pitch/yaw in its own orbit frame (3-2-1), the quaternion norm error,
+    the commanded control torque; per wheel the motor torque and saturation flag; per tether end
+    the force on the body (inertial) and, on a rigid body, its torque about G (body axes)."""
+    from .diagnostics import orbital_frame
+
+    out: dict = {}
+    if not model.rigid_index:
+        return out
+    wheel_col = 0
+    for b, body in enumerate(model.bodies):
+        if body.rigid is None:
+            continue
+        off = model.rigid_index[b]
+        q = Y[:, off : off + 4]
+        out[f"{body.name}.quat_norm_error"] = 1.0 - np.linalg.norm(q, axis=1)
+        r = bodies[:, b, :3]
+        v = bodies[:, b, 3:]
+        with np.errstate(invalid="ignore", divide="ignore"):  # no orbit frame (r x v = 0): NaN angles
+            f = orbital_frame(r, v)  # rows: radial, along-track, normal
+            O = np.stack([np.cross(-f[:, 2], -f[:, 0]), -f[:, 2], -f[:, 0]], axis=-1)  # columns o1, o2, o3
+            C = np.einsum("nji,njk->nik", O, rots[:, b])  # body -> orbit
+        out[f"{body.name}.roll_rad"] = np.arctan2(C[:, 2, 1], C[:, 2, 2])
+        out[f"{body.name}.pitch_rad"] = np.arcsin(np.clip(-C[:, 2, 0], -1.0, 1.0))
+        out[f"{body.name}.yaw_rad"] = np.arctan2(C[:, 1, 0], C[:, 0, 0])
+        for j, ax in enumerate("xyz"):
+            out[f"{body.name}.control_{ax}_N_m"] = d["control"][:, b, j]
+        for w in body.rigid.wheels:
+            out[f"{body.name}.{w.name}.torque_N_m"] = d["wheels"][:, wheel_col, 0]
+            out[f"{body.name}.{w.name}.saturated"] = d["wheels"][:, wheel_col, 1]
+            wheel_col += 1
+    kindex = {b.name: i for i, b in enumerate(model.bodies) if b.name}
+    g_joint = 0
+    for k, tet in enumerate(model.tethers):
+        J0 = d["joints"][:, g_joint]
+        Jn = d["joints"][:, g_joint + tet.rods]
+        g_joint += tet.rods + 1
+        parent, child = tet.parent, tet.tip_name
+        ends = {parent: (-J0, tet.from_point_m), child: (Jn, tet.to_point_m)}
+        for name, (F, pt) in ends.items():
+            side = ("to" if name == parent else "from") if tet.reversed else ("from" if name == parent else "to")
+            for j, ax in enumerate("xyz"):
+                out[f"{tet.name}.{side}_force_{ax}_N"] = F[:, j]
+            b = kindex[name]
+            if model.bodies[b].rigid is not None:
+                Fb = np.einsum("nji,nj->ni", rots[:, b], F)  # R^T F
+                tq = np.cross(np.asarray(pt, float), Fb)
+                for j, ax in enumerate("xyz"):
+                    out[f"{tet.name}.{side}_torque_{ax}_N_m"] = tq[:, j]
+    _ = nrows
+    return out
 
 
 def _center_of_mass_rows(model, Y):

@@ -44,8 +44,12 @@ from .units import (
     LINEAR_DENSITY,
     MASS,
     MODULUS,
+    ANGULAR_MOMENTUM,
+    ANGULAR_RATE,
+    MOMENT_OF_INERTIA,
     SPEED,
     TIME,
+    TORQUE,
     Kind,
     format_si,
     is_number,
@@ -82,6 +86,16 @@ QUADRATURE_RANGE = (1, 8)  # Gauss-Legendre nodes per half-rod
 SINGULAR_AT_ORIGIN = ("central_gravity", "j2", "zonal")
 
 Vector3 = tuple[float, float, float]
+
+#: Euler sequences accepted for a rigid body's initial attitude (intrinsic rotations, scipy's
+#: upper-case convention): the six Tait-Bryan and the six proper Euler sequences.
+EULER_SEQUENCES = ("XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX", "XYX", "XZX", "YXY", "YZY", "ZXZ", "ZYZ")
+#: |q| of a given quaternion must be within this of 1 (then it is normalised): a larger error is a
+#: typo, not round-off of printed digits.
+QUATERNION_NORM_TOL = 1e-6
+ATTITUDE_FRAMES = ("inertial", "orbit")
+RATE_FRAMES = ("body", "orbit")
+WHEEL_TORQUE_CONTROL = "control"
 
 
 # --------------------------------------------------------------------------------------------
@@ -122,8 +136,52 @@ class Elements:
 
 
 @dataclass(frozen=True)
+class Attitude:
+    """Initial attitude (docs/scenes.md): kind "orbit", "quaternion" (values = (w, x, y, z), unit)
+    or "euler" (values = 3 angles in rad, ``sequence``); ``frame`` the frame body axes map to."""
+
+    kind: str = "orbit"
+    values: tuple = ()
+    sequence: str = "ZYX"
+    frame: str = "inertial"
+
+
+@dataclass(frozen=True)
+class Wheel:
+    name: str
+    axis: Vector3  # unit, body axes
+    inertia_kg_m2: float
+    speed_rad_s: float = 0.0
+    max_speed_rad_s: float | None = None
+    max_torque_N_m: float | None = None
+    torque: Any = 0.0  # float (N m), "control", or (times_s, values_N_m)
+
+
+@dataclass(frozen=True)
+class Control:
+    law: str
+    target: str  # "orbit" | "inertial"
+    kp_N_m: float
+    kd_N_m_s: float
+    quaternion: tuple | None = None  # inertial target (w, x, y, z), unit
+
+
+@dataclass(frozen=True)
+class Rigid:
+    """A rigid body's inertia (J_B about G, body axes, wheels locked), initial attitude and rate,
+    wheels and controller (docs/scenes.md, [bodies.NAME.rigid])."""
+
+    inertia_kg_m2: tuple  # 3x3 nested tuple, symmetric
+    attitude: Attitude = Attitude()
+    angular_velocity_rad_s: Vector3 = (0.0, 0.0, 0.0)
+    angular_velocity_frame: str = "orbit"
+    wheels: tuple = ()
+    control: Control | None = None
+
+
+@dataclass(frozen=True)
 class Body:
-    """A point mass.  Its initial state is explicit (position/velocity, elements, or fixed with a
+    """A point mass (or, with ``rigid``, a rigid body whose position is its centre of mass).  Its initial state is explicit (position/velocity, elements, or fixed with a
     position) or, when all three are absent, laid out from the orbit and the tether shapes."""
 
     name: str
@@ -132,6 +190,7 @@ class Body:
     position_m: Vector3 | None = None
     velocity_m_s: Vector3 | None = None
     elements: Elements | None = None
+    rigid: Rigid | None = None
 
     @property
     def has_state(self) -> bool:
@@ -187,6 +246,8 @@ class Tether:
     # None when both ends are placed before the tether is laid (see Scene.layout_plan): it then
     # starts straight between them.
     initial: InitialShape | None = None
+    from_point_m: Vector3 | None = None  # attachment on the rigid `from` body, body axes
+    to_point_m: Vector3 | None = None
 
 
 @dataclass(frozen=True)
@@ -586,6 +647,7 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     )
     effects = _expand_per_body(effects, bodies)
     tethers = _parse_tethers(top.get("tethers", {}), bodies)
+    _check_forest(bodies, tethers)
     orbit = _parse_orbit(top["orbit"], bodies, mu) if "orbit" in top else None
     tethers = _check_layout(bodies, tethers, orbit, mu)
 
@@ -815,7 +877,7 @@ def _parse_bodies(value: Any, mu: float, origin_singular: list[str] = ()) -> tup
         path = f"bodies.{name}"
         if name == CENTER_OF_MASS:
             raise SceneError(path, f"a body name other than {CENTER_OF_MASS!r} (it names the centre of mass in [orbit])", repr(name))
-        table = _table(raw, path, ("mass", "position", "velocity", "elements", "fixed"))
+        table = _table(raw, path, ("mass", "position", "velocity", "elements", "fixed", "rigid", "wheels", "control"))
         fixed = table.get("fixed", False)
         if not isinstance(fixed, bool):
             raise SceneError(f"{path}.fixed", "true or false", f"{shown(fixed)} ({type(fixed).__name__})")
@@ -826,7 +888,8 @@ def _parse_bodies(value: Any, mu: float, origin_singular: list[str] = ()) -> tup
         else:
             mass = _quantity(_required(table, "mass", path, MASS.describe()), f"{path}.mass", MASS, positive=True)
         position, velocity, elements = _parse_state(table, path, fixed=fixed)
-        body = Body(name, mass, fixed, position, velocity, elements)
+        rigid = _parse_rigid(table, path, fixed)
+        body = Body(name, mass, fixed, position, velocity, elements, rigid)
         # The origin is the centre of the central body only for the effects singular there; a
         # surface-frame scene (uniform_gravity alone) may put its nail at the origin.
         if body.has_state and origin_singular:
@@ -839,6 +902,185 @@ def _parse_bodies(value: Any, mu: float, origin_singular: list[str] = ()) -> tup
                 )
         bodies.append(body)
     return tuple(bodies)
+
+
+# -- rigid bodies, wheels, control (issue 10) --------------------------------------------------
+
+_INERTIA_KEYS = ("xx", "yy", "zz", "xy", "xz", "yz")
+
+
+def _unit_quaternion(value: Any, key: str) -> tuple:
+    if not isinstance(value, (list, tuple)) or len(value) != 4:
+        raise SceneError(key, "a list of 4 numbers [w, x, y, z] (scalar first)", shown(value))
+    q = np.array([_number(x, f"{key}[{j}]", "a number") for j, x in enumerate(value)])
+    norm = float(np.linalg.norm(q))
+    if not abs(norm - 1.0) <= QUATERNION_NORM_TOL:
+        raise SceneError(key, f"a unit quaternion (|q| within {QUATERNION_NORM_TOL:g} of 1)", f"|q| = {norm:.9g}")
+    return tuple(float(x) for x in q / norm)
+
+
+def _parse_inertia(value: Any, key: str) -> tuple:
+    table = _table(value, key, _INERTIA_KEYS)
+    for k in ("xx", "yy", "zz"):
+        _required(table, k, key, MOMENT_OF_INERTIA.describe())
+    v = {k: (_quantity(table[k], f"{key}.{k}", MOMENT_OF_INERTIA) if k in table else 0.0) for k in _INERTIA_KEYS}
+    J = np.array([[v["xx"], v["xy"], v["xz"]], [v["xy"], v["yy"], v["yz"]], [v["xz"], v["yz"], v["zz"]]])
+    lam = np.linalg.eigvalsh(J)
+    if not lam[0] > 0.0:
+        raise SceneError(key, "a symmetric positive definite inertia tensor", f"principal moments {lam.tolist()}")
+    # a real mass distribution: each principal moment at most the sum of the other two
+    if lam[2] > (lam[0] + lam[1]) * (1.0 + 1e-12):
+        raise SceneError(
+            key, "principal moments satisfying the triangle inequality J3 <= J1 + J2 (a real mass distribution)",
+            f"principal moments {lam.tolist()}",
+        )
+    return tuple(tuple(float(x) for x in row) for row in J)
+
+
+def _parse_attitude(value: Any, key: str) -> Attitude:
+    if isinstance(value, str):
+        if value != "orbit":
+            raise SceneError(key, "'orbit', or a table with quaternion or euler", repr(value), hint=_suggest(value, ["orbit"]))
+        return Attitude()
+    table = _table(value, key, ("quaternion", "euler", "sequence", "frame"))
+    frame = _choice(table.get("frame", "inertial"), f"{key}.frame", ATTITUDE_FRAMES)
+    if ("quaternion" in table) == ("euler" in table):
+        raise SceneError(key, "exactly one of quaternion and euler", "both" if "quaternion" in table else "neither")
+    if "quaternion" in table:
+        if "sequence" in table:
+            raise SceneError(f"{key}.sequence", "no sequence with a quaternion", shown(table["sequence"]))
+        return Attitude("quaternion", _unit_quaternion(table["quaternion"], f"{key}.quaternion"), "ZYX", frame)
+    seq = _choice(table.get("sequence", "ZYX"), f"{key}.sequence", EULER_SEQUENCES)
+    angles = table["euler"]
+    if not isinstance(angles, (list, tuple)) or len(angles) != 3:
+        raise SceneError(f"{key}.euler", f"a list of 3 angles ({ANGLE.describe()})", shown(angles))
+    vals = tuple(to_si(a, ANGLE, key=f"{key}.euler[{j}]") for j, a in enumerate(angles))
+    return Attitude("euler", vals, seq, frame)
+
+
+def _parse_wheel(name: str, raw: Any, path: str) -> Wheel:
+    table = _table(raw, path, ("axis", "inertia", "speed", "max_speed", "max_torque", "torque"))
+    axis_raw = _required(table, "axis", path, "3 numbers (body axes)")
+    if not isinstance(axis_raw, (list, tuple)) or len(axis_raw) != 3:
+        raise SceneError(f"{path}.axis", "a list of 3 numbers (body axes)", shown(axis_raw))
+    axis = np.array([_number(x, f"{path}.axis[{j}]", "a number") for j, x in enumerate(axis_raw)])
+    n = float(np.linalg.norm(axis))
+    if not n > 0.0:
+        raise SceneError(f"{path}.axis", "a non-zero axis", shown(axis_raw))
+    inertia = _quantity(_required(table, "inertia", path, MOMENT_OF_INERTIA.describe()), f"{path}.inertia", MOMENT_OF_INERTIA, positive=True)
+    speed = _quantity(table["speed"], f"{path}.speed", ANGULAR_RATE) if "speed" in table else 0.0
+    max_speed = _quantity(table["max_speed"], f"{path}.max_speed", ANGULAR_RATE, positive=True) if "max_speed" in table else None
+    max_torque = _quantity(table["max_torque"], f"{path}.max_torque", TORQUE, positive=True) if "max_torque" in table else None
+    if max_speed is not None and abs(speed) > max_speed:
+        raise SceneError(f"{path}.speed", f"an initial speed within max_speed ({max_speed:g} rad/s)", f"{speed:g} rad/s")
+    torque: Any = 0.0
+    if "torque" in table:
+        raw_t = table["torque"]
+        key = f"{path}.torque"
+        if isinstance(raw_t, str) and raw_t.strip() == WHEEL_TORQUE_CONTROL:
+            torque = WHEEL_TORQUE_CONTROL
+        elif isinstance(raw_t, Mapping):
+            tt = _table(raw_t, key, ("times", "values"))
+            times = _required(tt, "times", key, "a list of times")
+            values = _required(tt, "values", key, "a list of torques")
+            if not isinstance(times, (list, tuple)) or not isinstance(values, (list, tuple)) or len(times) != len(values) or len(times) < 1:
+                raise SceneError(key, "times and values: two lists of the same length >= 1", f"{shown(times)}, {shown(values)}")
+            ts = tuple(to_si(x, TIME, key=f"{key}.times[{j}]") for j, x in enumerate(times))
+            if any(b <= a for a, b in zip(ts, ts[1:])):
+                raise SceneError(f"{key}.times", "strictly increasing times", shown(times))
+            vs = tuple(to_si(x, TORQUE, key=f"{key}.values[{j}]") for j, x in enumerate(values))
+            torque = (ts, vs)
+        else:
+            torque = to_si(raw_t, TORQUE, key=key)
+    return Wheel(name, tuple(float(x) for x in axis / n), inertia, speed, max_speed, max_torque, torque)
+
+
+def _parse_control(raw: Any, path: str) -> Control:
+    table = _table(raw, path, ("law", "target", "kp", "kd"))
+    law = _choice(table.get("law", "pd"), f"{path}.law", ("pd",))
+    target_raw = _required(table, "target", path, "'orbit' or { quaternion = [w, x, y, z] } (a controller needs a target)")
+    quat = None
+    if isinstance(target_raw, str):
+        target = _choice(target_raw, f"{path}.target", ("orbit",))
+    else:
+        tt = _table(target_raw, f"{path}.target", ("quaternion",))
+        quat = _unit_quaternion(_required(tt, "quaternion", f"{path}.target", "[w, x, y, z]"), f"{path}.target.quaternion")
+        target = "inertial"
+    kp = _quantity(_required(table, "kp", path, TORQUE.describe()), f"{path}.kp", TORQUE, positive=True)
+    kd = _quantity(_required(table, "kd", path, ANGULAR_MOMENTUM.describe()), f"{path}.kd", ANGULAR_MOMENTUM, nonnegative=True)
+    return Control(law, target, kp, kd, quat)
+
+
+def _parse_rigid(table: Mapping[str, Any], path: str, fixed: bool) -> Rigid | None:
+    if "rigid" not in table:
+        for key in ("wheels", "control"):
+            if key in table:
+                raise SceneError(f"{path}.{key}", f"a [{path}.rigid] table: {key} only on a rigid body", "a point mass")
+        return None
+    rpath = f"{path}.rigid"
+    if fixed:
+        raise SceneError(rpath, "no rigid table on a fixed body (it never moves or turns)", "a rigid table")
+    rt = _table(table["rigid"], rpath, ("inertia", "attitude", "angular_velocity"))
+    inertia = _parse_inertia(_required(rt, "inertia", rpath, "a table {xx, yy, zz, xy, xz, yz} of moments of inertia"), f"{rpath}.inertia")
+    attitude = _parse_attitude(rt["attitude"], f"{rpath}.attitude") if "attitude" in rt else Attitude()
+    omega: Vector3 = (0.0, 0.0, 0.0)
+    frame = "orbit"
+    if "angular_velocity" in rt:
+        key = f"{rpath}.angular_velocity"
+        at = _table(rt["angular_velocity"], key, ("vector", "frame"))
+        omega = _vector(_required(at, "vector", key, f"3 x {ANGULAR_RATE.describe()}"), f"{key}.vector", ANGULAR_RATE)
+        frame = _choice(at.get("frame", "body"), f"{key}.frame", RATE_FRAMES)
+    wheels = tuple(
+        _parse_wheel(name, raw, f"{path}.wheels.{name}")
+        for name, raw in _named_tables(table.get("wheels", {}), f"{path}.wheels", "wheels").items()
+    )
+    control = _parse_control(table["control"], f"{path}.control") if "control" in table else None
+    controlled = [w.name for w in wheels if w.torque == WHEEL_TORQUE_CONTROL]
+    if control is not None and not controlled:
+        raise SceneError(f"{path}.control", "at least one wheel with torque = 'control' to act through", "none")
+    if controlled and control is None:
+        raise SceneError(
+            f"{path}.wheels.{controlled[0]}.torque", f"a [{path}.control] table for torque = 'control'", "no controller"
+        )
+    # the body with its wheels free must still have a positive definite inertia
+    JS = np.array(inertia) - sum((w.inertia_kg_m2 * np.outer(w.axis, w.axis) for w in wheels), np.zeros((3, 3)))
+    if wheels and not np.linalg.eigvalsh(JS)[0] > 0.0:
+        raise SceneError(
+            f"{path}.wheels", f"wheels whose axial inertias fit in {rpath}.inertia (J_B - sum I_k a_k a_k^T positive definite)",
+            f"eigenvalues {np.linalg.eigvalsh(JS).tolist()}",
+        )
+    return Rigid(inertia, attitude, omega, frame, wheels, control)
+
+
+def _check_forest(bodies: tuple[Body, ...], tethers: tuple["Tether", ...]) -> None:
+    """Bodies and tethers must form a forest: the tether that joins two bodies already joined
+    closes a loop (issue 10: loops are refused, naming that tether)."""
+    parent = {b.name: b.name for b in bodies}
+
+    def find(x):
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        return x
+
+    for t in tethers:
+        a, b = find(t.from_body), find(t.to_body)
+        if a == b:
+            raise SceneError(
+                f"tethers.{t.name}",
+                "tethers forming a tree (no closed loop: the elimination runs towards one root)",
+                f"tether {t.name!r} closes a loop between {t.from_body!r} and {t.to_body!r}",
+            )
+        parent[a] = b
+    by_name = {b.name: b for b in bodies}
+    for t in tethers:
+        for end, key in ((t.from_body, "from_point"), (t.to_body, "to_point")):
+            point = t.from_point_m if key == "from_point" else t.to_point_m
+            if point is not None and by_name[end].rigid is None:
+                raise SceneError(
+                    f"tethers.{t.name}.{key}", f"a rigid body at this end (give bodies.{end}.rigid), or no {key}",
+                    f"an attachment point on the point mass {end!r}",
+                )
 
 
 # -- tethers -----------------------------------------------------------------------------------
@@ -859,6 +1101,8 @@ _TETHER_KEYS = (
     "quadrature",
     "initial",
     "tension_only",
+    "from_point",
+    "to_point",
 )
 
 
@@ -882,15 +1126,6 @@ def _parse_tethers(value: Any, bodies: tuple[Body, ...]) -> tuple[Tether, ...]:
         end = _body_ref(_required(table, "to", path, "the name of the body at end B_n"), f"{path}.to", names)
         if end == start:
             raise SceneError(f"{path}.to", f"a body other than 'from' ({start!r})", f"{end!r} (the same body at both ends)")
-        if end in to_owner:
-            # The layout and the kernel's node numbering assume each body ends at most one tether
-            # on its B_n side; lifting this needs a junction model, not just a different check.
-            raise SceneError(
-                f"{path}.to",
-                "a body that is not yet the 'to' end of another tether (for now a body may be the "
-                "'to' end of at most one tether)",
-                f"{end!r} (already the 'to' end of tether {to_owner[end]!r})",
-            )
         to_owner[end] = name
         rods = _integer(_required(table, "rods", path, "an integer >= 1"), f"{path}.rods", 1)
         length = _quantity(_required(table, "length", path, LENGTH.describe()), f"{path}.length", LENGTH, positive=True)
@@ -933,8 +1168,11 @@ def _parse_tethers(value: Any, bodies: tuple[Body, ...]) -> tuple[Tether, ...]:
         tension_only = table.get("tension_only", False)
         if not isinstance(tension_only, bool):
             raise SceneError(f"{path}.tension_only", "true or false", f"{shown(tension_only)} ({type(tension_only).__name__})")
+        from_point = _vector(table["from_point"], f"{path}.from_point", LENGTH) if "from_point" in table else None
+        to_point = _vector(table["to_point"], f"{path}.to_point", LENGTH) if "to_point" in table else None
         tethers.append(
-            Tether(name, start, end, rods, length, ea, mass, damping, model, quadrature, diameter, tension_only=tension_only, initial=initial)
+            Tether(name, start, end, rods, length, ea, mass, damping, model, quadrature, diameter, tension_only=tension_only,
+                   initial=initial, from_point_m=from_point, to_point_m=to_point)
         )
     return tuple(tethers)
 
@@ -1266,6 +1504,49 @@ def _state_dict(position, velocity, elements) -> dict[str, Any]:
     return out
 
 
+def _rigid_dict(r: Rigid) -> dict[str, Any]:
+    J = r.inertia_kg_m2
+    inertia = {k: format_si(J[i][j], MOMENT_OF_INERTIA) for k, (i, j) in zip(_INERTIA_KEYS, ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)))}
+    a = r.attitude
+    if a.kind == "orbit":
+        attitude: Any = "orbit"
+    elif a.kind == "quaternion":
+        attitude = {"quaternion": list(a.values), "frame": a.frame}
+    else:
+        attitude = {"euler": [format_si(x, ANGLE) for x in a.values], "sequence": a.sequence, "frame": a.frame}
+    out: dict[str, Any] = {
+        "rigid": {
+            "inertia": inertia,
+            "attitude": attitude,
+            "angular_velocity": {"vector": _vec(r.angular_velocity_rad_s, ANGULAR_RATE), "frame": r.angular_velocity_frame},
+        }
+    }
+    if r.wheels:
+        wheels = {}
+        for w in r.wheels:
+            e: dict[str, Any] = {"axis": list(w.axis), "inertia": format_si(w.inertia_kg_m2, MOMENT_OF_INERTIA),
+                                 "speed": format_si(w.speed_rad_s, ANGULAR_RATE)}
+            if w.max_speed_rad_s is not None:
+                e["max_speed"] = format_si(w.max_speed_rad_s, ANGULAR_RATE)
+            if w.max_torque_N_m is not None:
+                e["max_torque"] = format_si(w.max_torque_N_m, TORQUE)
+            if isinstance(w.torque, str):
+                e["torque"] = w.torque
+            elif isinstance(w.torque, tuple):
+                e["torque"] = {"times": [format_si(x, TIME) for x in w.torque[0]], "values": [format_si(x, TORQUE) for x in w.torque[1]]}
+            else:
+                e["torque"] = format_si(w.torque, TORQUE)
+            wheels[w.name] = e
+        out["wheels"] = wheels
+    if r.control is not None:
+        c = r.control
+        out["control"] = {
+            "law": c.law, "target": "orbit" if c.target == "orbit" else {"quaternion": list(c.quaternion)},
+            "kp": format_si(c.kp_N_m, TORQUE), "kd": format_si(c.kd_N_m_s, ANGULAR_MOMENTUM),
+        }
+    return out
+
+
 def _angles_dict(value) -> Any:
     if isinstance(value, tuple):
         return [format_si(x, ANGLE) for x in value]
@@ -1309,6 +1590,8 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
         if b.fixed:
             entry["fixed"] = True
         entry.update(_state_dict(b.position_m, b.velocity_m_s, b.elements))
+        if b.rigid is not None:
+            entry.update(_rigid_dict(b.rigid))
         bodies[b.name] = entry
     out["bodies"] = bodies
     if scene.tethers:
@@ -1329,6 +1612,10 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
                 entry["diameter"] = format_si(t.diameter_m, LENGTH)
             if t.tension_only:
                 entry["tension_only"] = True
+            if t.from_point_m is not None:
+                entry["from_point"] = _vec(t.from_point_m, LENGTH)
+            if t.to_point_m is not None:
+                entry["to_point"] = _vec(t.to_point_m, LENGTH)
             # A default shape is left out: it reads back the same, and a sweep that later places
             # both ends explicitly is not tripped by a shape nobody asked for.
             if t.initial is not None and t.initial != InitialShape():

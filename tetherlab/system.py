@@ -37,6 +37,51 @@ class TetherSpec:
     tip_name: str = ""
     diameter_m: float | None = None  # for effects on the tether's cross-section (drag); None: unknown
     tension_only: bool = False  # no axial force in compression (slack tether)
+    parent: str = ""  # body at end A_1 in the kernel (the root side); "" = the model's root
+    from_point_m: tuple = (0.0, 0.0, 0.0)  # attachment of A_1 on the parent, body axes (rigid)
+    to_point_m: tuple = (0.0, 0.0, 0.0)  # attachment of B_n on the child, body axes (rigid)
+    reversed: bool = False  # the scene writes it child -> parent: outputs flip it back
+
+
+@dataclass(frozen=True)
+class WheelSpec:
+    """A momentum wheel (SI, validated by the scene layer; docs/model.md section 12)."""
+
+    name: str
+    axis: tuple  # unit vector, body axes
+    inertia_kg_m2: float
+    speed_rad_s: float = 0.0  # initial spin relative to the body
+    max_speed_rad_s: float = 0.0  # 0: no limit
+    max_torque_N_m: float = 0.0  # 0: no limit
+    mode: str = "constant"  # "constant" | "table" | "control"
+    torque_N_m: float = 0.0
+    times_s: tuple = ()
+    values_N_m: tuple = ()
+
+
+@dataclass(frozen=True)
+class ControlSpec:
+    target: str  # "orbit" | "inertial"
+    kp_N_m: float
+    kd_N_m_s: float
+    quaternion: tuple = (1.0, 0.0, 0.0, 0.0)  # inertial target (w, x, y, z)
+
+
+@dataclass(frozen=True)
+class RigidSpec:
+    inertia_kg_m2: tuple  # J_B about G, body axes, wheels locked (3x3 nested tuple)
+    wheels: tuple = ()  # WheelSpec
+    control: ControlSpec | None = None
+
+
+@dataclass(frozen=True)
+class BodySpec:
+    """A body of the kernel (kernel order: docs/scenes.md)."""
+
+    name: str
+    mass_kg: float
+    fixed: bool = False
+    rigid: RigidSpec | None = None
 
 
 @dataclass
@@ -53,6 +98,23 @@ class Model:
     root_name: str = "m0"
     rod_slices: list[slice] = field(default_factory=list)  # global rod indices of each tether
     effect_meta: dict = field(default_factory=dict)  # what effects report at pack time (fit errors)
+    bodies: list = field(default_factory=list)  # BodySpec in kernel order ("" names: free ends)
+    roots: list = field(default_factory=list)  # kernel indices of the root bodies
+    rigid_index: dict = field(default_factory=dict)  # body index -> attitude offset in y
+    wheel_index: dict = field(default_factory=dict)  # (body index, wheel name) -> state index
+
+    @property
+    def n_qt(self) -> int:
+        """Length of q_trans (the second-order part: y = [q_trans, q_trans', attitude, wheels])."""
+        return int(self.p[L.H_NQT])
+
+    @property
+    def has_attitude(self) -> bool:
+        return self.n_state > 2 * self.n_qt
+
+    def root_offset(self, b: int) -> int:
+        """Index in q_trans of root body b's position."""
+        return int(self.p[int(self.p[L.H_OFF_BODY]) + b * L.BT_SIZE + L.BT_QOFF])
 
     @property
     def n_rods(self) -> int:
@@ -75,9 +137,7 @@ class Model:
         return self.p[off + L.RT_LU : off + self.n_rods * L.RT_SIZE : L.RT_SIZE].copy()
 
     def total_mass(self) -> float:
-        return (0.0 if self.root_fixed else self.root_mass_kg) + sum(
-            t.mass_kg + t.tip_mass_kg for t in self.tethers
-        )
+        return sum(b.mass_kg for b in self.bodies if not b.fixed) + sum(t.mass_kg for t in self.tethers)
 
 
 def gauss_legendre_halves(nq: int) -> tuple[np.ndarray, np.ndarray]:
@@ -101,20 +161,41 @@ def build_model(
     root_name: str = "m0",
     epoch: str | None = None,
     duration_s: float | None = None,
+    bodies: list[BodySpec] | None = None,
+    defect: int = L.DEFECT_NONE,
 ) -> Model:
     """Pack the parameter block.  Inputs are SI floats that the scene layer has validated.
 
     ``epoch`` (ISO date, TDB) and ``duration_s`` are for time-dependent effects (ephemerides fitted
     over the run); effects that do not need them ignore them.
+
+    ``bodies``: the bodies in kernel order (docs/scenes.md: 0 the first root, 1 + k the child end
+    of tether k, then the other roots); each tether's ``parent`` names its root-side body.
+    Without it: the star of the original API (a root named ``root_name`` carrying every tether,
+    tips of ``tip_mass_kg``; a tip mass of 0 is a free end).  ``defect``: negative controls only.
     """
     nteth = len(tethers)
     nrods = sum(t.rods for t in tethers)
-    n_state = 6 * (1 + nrods)
+    if bodies is None:
+        bodies = [BodySpec(root_name, 0.0 if root_fixed else root_mass_kg, root_fixed)] + [
+            BodySpec(t.tip_name, t.tip_mass_kg) for t in tethers
+        ]
+        tethers = [t if t.parent else _with_parent(t, root_name) for t in tethers]
+    names = [b.name for b in bodies]
+    index = {b.name: i for i, b in enumerate(bodies) if b.name}
+    nbody = len(bodies)
+    if nbody < 1 + nteth:
+        raise ValueError("bodies: expected 1 + one per tether (its child end) + the other roots")
+    roots = [0] + list(range(1 + nteth, nbody))
+    nqt = 3 * (1 + nrods) + 3 * (nbody - 1 - nteth)
+    rigid = [b for b in range(nbody) if bodies[b].rigid is not None]
+    wheels = [(b, w) for b in rigid for w in bodies[b].rigid.wheels]
+    n_state = 2 * nqt + 7 * len(rigid) + len(wheels)
 
     # What an effect with per-body or per-tether parameters needs to lay them out in kernel order:
-    # body index 0 is the root, 1 + k the tip of tether k (the ``body`` argument of body_force).
+    # body index 0 is the root, 1 + k the child end of tether k (the ``body`` argument of body_force).
     ctx = {
-        "bodies": [root_name] + [t.tip_name for t in tethers],
+        "bodies": names,
         "tethers": list(tethers),
         "root_fixed": root_fixed,
         "epoch": epoch,
@@ -130,12 +211,17 @@ def build_model(
         "rod": nrods * L.RT_SIZE,
         "quad": 4 * quadrature,
         "cnt": L.N_EFFECT_CODES,
-        # rod scratch, joint scratch (n+1 joints per tether), root 3x3 system (A, b, A^-1)
-        "scr": nrods * L.SR_SIZE + (nrods + nteth) * L.SJ_SIZE + 21,
+        # rod scratch, joint scratch (n+1 joints per tether)
+        "scr": nrods * L.SR_SIZE + (nrods + nteth) * L.SJ_SIZE,
+        "body": nbody * L.BT_SIZE,
+        "order": nteth,
+        "roots": len(roots),
+        "wt": len(wheels) * L.WT_SIZE + sum(2 * len(w.times_s) for _, w in wheels),
+        "bscr": nbody * L.BS_SIZE + nteth * L.TS_SIZE + len(wheels) * L.WS_SIZE + 72,
     }
     offs = {}
     pos = L.H_SIZE
-    for key in ("eff", "teth", "rod", "quad", "cnt", "scr"):
+    for key in ("eff", "teth", "rod", "quad", "cnt", "scr", "body", "order", "roots", "wt", "bscr"):
         offs[key] = pos
         pos += sizes[key]
     p = np.zeros(pos)
@@ -156,6 +242,22 @@ def build_model(
     p[L.H_OFF_CNT] = offs["cnt"]
     p[L.H_FAIL_ROD] = -1
     p[L.H_MIN_STRAIN] = MIN_STRAIN
+    p[L.H_NQT] = nqt
+    p[L.H_OFF_ATT] = 2 * nqt
+    p[L.H_NRIGID] = len(rigid)
+    p[L.H_OFF_WHL] = 2 * nqt + 7 * len(rigid)
+    p[L.H_NWHEEL] = len(wheels)
+    p[L.H_NBODY] = nbody
+    p[L.H_OFF_BODY] = offs["body"]
+    p[L.H_OFF_ORDER] = offs["order"]
+    p[L.H_OFF_WT] = offs["wt"]
+    p[L.H_OFF_BSCR] = offs["bscr"]
+    p[L.H_NROOT] = len(roots)
+    p[L.H_OFF_ROOTS] = offs["roots"]
+    p[L.H_DEFECT] = defect
+    # the gravity-gradient torque acts where central_gravity acts (docs/model.md section 12)
+    p[L.H_MU_GG] = central["mu_m3_s2"] if any(spec.name == "central_gravity" for spec, _ in effects) else 0.0
+    p[offs["roots"] : offs["roots"] + len(roots)] = roots
 
     # effect table, parameters after the table
     par = offs["eff"] + len(effects) * L.ET_SIZE
@@ -177,6 +279,9 @@ def build_model(
         p[base + L.TT_TIP_M] = t.tip_mass_kg
         p[base + L.TT_MODEL] = {"paper": L.MODEL_PAPER, "energy": L.MODEL_ENERGY, "printed": L.MODEL_PRINTED}[t.model]
         p[base + L.TT_TENSION_ONLY] = 1.0 if t.tension_only else 0.0
+        p[base + L.TT_PARENT] = index[t.parent]
+        p[base + L.TT_CHILD] = 1 + k if bodies[1 + k].name and bodies[1 + k].mass_kg > 0 else -1
+        p[base + L.TT_PA : base + L.TT_PA + 3] = t.from_point_m
         rod_slices.append(slice(g, g + t.rods))
         for _ in range(t.rods):
             rb = offs["rod"] + g * L.RT_SIZE
@@ -192,6 +297,76 @@ def build_model(
     p[offs["quad"] : offs["quad"] + 2 * quadrature] = nodes
     p[offs["quad"] + 2 * quadrature : offs["quad"] + 4 * quadrature] = weights
 
+    # bodies: parents, depths (tether order leaves first), attitude and wheel blocks
+    parent_tether = {1 + k: k for k in range(nteth)}
+    depth = [0] * nbody
+    for _ in range(nteth + 1):  # depths by relaxation (trees are validated by the scene layer)
+        for k, t in enumerate(tethers):
+            depth[1 + k] = depth[index[t.parent]] + 1
+    order = sorted(range(nteth), key=lambda k: (-depth[1 + k], k))
+    p[offs["order"] : offs["order"] + nteth] = order
+    rigid_index = {}
+    wheel_index = {}
+    att = 2 * nqt
+    whl = 2 * nqt + 7 * len(rigid)
+    wt = offs["wt"]
+    tab = wt + len(wheels) * L.WT_SIZE
+    extra = 3 * (1 + nrods)
+    for b, body in enumerate(bodies):
+        bt = offs["body"] + b * L.BT_SIZE
+        fixed = body.fixed or not body.mass_kg > 0
+        p[bt + L.BT_M] = 0.0 if fixed else body.mass_kg
+        p[bt + L.BT_INV_M] = 0.0 if fixed else 1.0 / body.mass_kg
+        p[bt + L.BT_QOFF] = 0 if b == 0 else (extra + 3 * (b - 1 - nteth) if b > nteth else -1)
+        p[bt + L.BT_PARENT] = parent_tether.get(b, -1)
+        p[bt + L.BT_AOFF] = -1
+        p[bt + L.BT_NCHILD] = sum(1 for t in tethers if t.parent == body.name and body.name)
+        if 1 <= b <= nteth:
+            p[bt + L.BT_PT : bt + L.BT_PT + 3] = tethers[b - 1].to_point_m
+        if body.rigid is None:
+            continue
+        rs = body.rigid
+        p[bt + L.BT_RIGID] = 1.0
+        p[bt + L.BT_AOFF] = att
+        rigid_index[b] = att
+        att += 7
+        JB = np.asarray(rs.inertia_kg_m2, float)
+        JS = JB.copy()
+        p[bt + L.BT_W0] = len(wheel_index)
+        p[bt + L.BT_NW] = len(rs.wheels)
+        ctrl = [w for w in rs.wheels if w.mode == "control"]
+        pinv = np.linalg.pinv(np.array([w.axis for w in ctrl], float).T) if ctrl else None
+        for w in rs.wheels:
+            j = len(wheel_index)
+            wheel_index[(b, w.name)] = whl + j
+            a = np.asarray(w.axis, float)
+            JS -= w.inertia_kg_m2 * np.outer(a, a)
+            wb = wt + j * L.WT_SIZE
+            p[wb + L.WT_BODY] = b
+            p[wb + L.WT_AX : wb + L.WT_AX + 3] = a
+            p[wb + L.WT_I] = w.inertia_kg_m2
+            p[wb + L.WT_MODE] = {"constant": L.WMODE_CONST, "table": L.WMODE_TABLE, "control": L.WMODE_CONTROL}[w.mode]
+            p[wb + L.WT_TAU] = w.torque_N_m
+            p[wb + L.WT_MAXW] = w.max_speed_rad_s
+            p[wb + L.WT_MAXT] = w.max_torque_N_m
+            if w.mode == "table":
+                nt = len(w.times_s)
+                p[wb + L.WT_TOFF] = tab
+                p[wb + L.WT_TN] = nt
+                p[tab : tab + nt] = w.times_s
+                p[tab + nt : tab + 2 * nt] = w.values_N_m
+                tab += 2 * nt
+            if w.mode == "control":
+                p[wb + L.WT_PINV : wb + L.WT_PINV + 3] = pinv[ctrl.index(w)]
+        p[bt + L.BT_JS : bt + L.BT_JS + 9] = JS.ravel()
+        p[bt + L.BT_JB : bt + L.BT_JB + 9] = JB.ravel()
+        if rs.control is not None:
+            c = rs.control
+            p[bt + L.BT_CTRL] = L.CTRL_ORBIT if c.target == "orbit" else L.CTRL_INERTIAL
+            p[bt + L.BT_KP] = c.kp_N_m
+            p[bt + L.BT_KD] = c.kd_N_m_s
+            p[bt + L.BT_QT : bt + L.BT_QT + 4] = c.quaternion
+
     return Model(
         p=p,
         root_mass_kg=root_mass_kg,
@@ -203,7 +378,17 @@ def build_model(
         root_name=root_name,
         rod_slices=rod_slices,
         effect_meta=ctx["meta"],
+        bodies=list(bodies),
+        roots=roots,
+        rigid_index=rigid_index,
+        wheel_index=wheel_index,
     )
+
+
+def _with_parent(t: TetherSpec, parent: str) -> TetherSpec:
+    from dataclasses import replace
+
+    return replace(t, parent=parent)
 
 
 def chain_state(
@@ -218,10 +403,12 @@ def chain_state(
 
     ``rod_dirs[k]`` is an (n_k, 3) array of unit vectors along the rods of tether k (from the
     root side to the tip side).  The whole system moves rigidly: translation with v0 plus rotation
-    with angular velocity ``omega`` (None: pure translation), so d_i' = omega x d_i.
+    with angular velocity ``omega`` (None: pure translation), so d_i' = omega x d_i.  Other roots
+    start at the origin at rest; the attitude block (if any) at the identity, at rest, and the
+    wheels at their initial speeds (:func:`attitude_block`).
     """
-    nrods = model.n_rods
-    q = np.zeros(3 * (1 + nrods))
+    nqt = model.n_qt
+    q = np.zeros(nqt)
     qd = np.zeros_like(q)
     q[:3] = r0
     qd[:3] = v0
@@ -235,38 +422,59 @@ def chain_state(
             d = u * lengths[g] * (1.0 + strains[k]) / (2.0 * SQ3)  # eq. 3
             q[3 + 3 * g : 6 + 3 * g] = d
             qd[3 + 3 * g : 6 + 3 * g] = np.cross(w, d)
-    return np.concatenate([q, qd])
+    return np.concatenate([q, qd, attitude_block(model, {})])
+
+
+def attitude_block(model: Model, states: dict) -> np.ndarray:
+    """The attitude and wheel block of y: per rigid body (kernel order) its quaternion (w, x, y, z,
+    body -> inertial) and omega (body axes) from ``states[b] = (q, omega_b)`` (default identity, at
+    rest); per wheel its axial momentum h = I (a . omega_b + Omega_0) (bodies/wheels.py)."""
+    out = []
+    wheels = []
+    for b in sorted(model.rigid_index):
+        qb, wb = states.get(b, ((1.0, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))
+        out.extend(qb)
+        out.extend(wb)
+        for w in model.bodies[b].rigid.wheels:
+            wheels.append(w.inertia_kg_m2 * (float(np.dot(w.axis, wb)) + w.speed_rad_s))
+    return np.array(out + wheels, float)
+
+
+def _state_parts(model: Model, y: np.ndarray):
+    nqt = model.n_qt
+    y = np.ascontiguousarray(y, float)
+    return y[:nqt], y[nqt : 2 * nqt], y[2 * nqt :]
 
 
 def point_positions(model: Model, y: np.ndarray) -> dict:
-    """Inertial positions/velocities of the root, rod centres, joints and tips for one state (eq. 23)."""
+    """Inertial positions/velocities of the bodies, rod centres, joints and tips for one state
+    (eq. 23), from the compiled kinematics of the forest (tether/chain.py: forward)."""
+    from .tether.chain import joint_states
+
     nr = model.n_rods
-    h = 3 * (1 + nr)
-    q = y[:h]
-    qd = y[h:]
-    r0 = q[:3]
-    v0 = qd[:3]
-    d = q[3:].reshape(nr, 3)
-    dd = qd[3:].reshape(nr, 3)
+    q, qd, att = _state_parts(model, y)
+    p = model.fresh_params()
+    nj = nr + len(model.tethers)
+    out = np.zeros((nj, 6))
+    bodies = np.zeros((len(model.bodies), 6))
+    rot = np.zeros((len(model.bodies), 9))
+    joint_states(q, qd, att, p, out, bodies, rot)
+    d = q[3 : 3 + 3 * nr].reshape(nr, 3)
+    dd = qd[3 : 3 + 3 * nr].reshape(nr, 3)
     rG = np.zeros((nr, 3))
     vG = np.zeros((nr, 3))
-    joints = []  # per tether: (n_k + 1, 3) positions of A_1, B_1, ..., B_n
+    joints = []  # per tether: (n_k + 1, 3) positions of A_1, B_1, ..., B_n (kernel order)
     jvel = []
-    for sl in model.rod_slices:
-        a = r0.copy()
-        av = v0.copy()
-        js = [a.copy()]
-        jv = [av.copy()]
-        for g in range(sl.start, sl.stop):
-            rG[g] = a + SQ3 * d[g]
-            vG[g] = av + SQ3 * dd[g]
-            a = a + 2 * SQ3 * d[g]
-            av = av + 2 * SQ3 * dd[g]
-            js.append(a.copy())
-            jv.append(av.copy())
-        joints.append(np.array(js))
-        jvel.append(np.array(jv))
-    return {"r0": r0, "v0": v0, "d": d, "dd": dd, "rG": rG, "vG": vG, "joints": joints, "jvel": jvel}
+    for k, sl in enumerate(model.rod_slices):
+        block = out[sl.start + k : sl.stop + k + 1]
+        joints.append(block[:, :3].copy())
+        jvel.append(block[:, 3:].copy())
+        rG[sl.start : sl.stop] = block[:-1, :3] + SQ3 * d[sl.start : sl.stop]
+        vG[sl.start : sl.stop] = block[:-1, 3:] + SQ3 * dd[sl.start : sl.stop]
+    return {
+        "r0": bodies[0, :3].copy(), "v0": bodies[0, 3:].copy(), "d": d, "dd": dd, "rG": rG, "vG": vG,
+        "joints": joints, "jvel": jvel, "bodies": bodies, "rotations": rot.reshape(-1, 3, 3),
+    }
 
 
 def center_of_mass(model: Model, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -275,33 +483,37 @@ def center_of_mass(model: Model, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     M = 0.0
     r = np.zeros(3)
     v = np.zeros(3)
-    if not model.root_fixed:
-        M += model.root_mass_kg
-        r += model.root_mass_kg * pts["r0"]
-        v += model.root_mass_kg * pts["v0"]
+    for b, body in enumerate(model.bodies):
+        if body.fixed or not body.mass_kg > 0 or not body.name:
+            continue
+        M += body.mass_kg
+        r += body.mass_kg * pts["bodies"][b, :3]
+        v += body.mass_kg * pts["bodies"][b, 3:]
     M += m.sum()
     r += m @ pts["rG"]
     v += m @ pts["vG"]
-    for k, t in enumerate(model.tethers):
-        if t.tip_mass_kg > 0:
-            M += t.tip_mass_kg
-            r += t.tip_mass_kg * pts["joints"][k][-1]
-            v += t.tip_mass_kg * pts["jvel"][k][-1]
     return r / M, v / M
 
 
 def tolerance_scales(model: Model, ref_length_m: float, ref_time_s: float) -> np.ndarray:
     """Natural scale of each state component: atol_i = atol * scale_i (atol in scale units).
 
-    Root position: the orbit radius; root velocity: radius/time unit; d_i: the rod's half
+    Root positions: the orbit radius; their velocities: radius/time unit; d_i: the rod's half
     TMED separation L_u/(2 sqrt 3); d_i': that over the time unit.  So a scene's atol = 1e-10
-    means 1e-10 of each quantity's own size, not 1e-10 m on a 7000 km orbit radius.
+    means 1e-10 of each quantity's own size, not 1e-10 m on a 7000 km orbit radius.  Quaternion
+    components: 1; body rates: 1/time unit; wheel momenta: I_k times the larger of 1/time unit and
+    the wheel's speed limit or initial speed.
     """
     nr = model.n_rods
     lengths = model.rod_lengths()
-    s_q = np.empty(3 * (1 + nr))
-    s_q[:3] = ref_length_m
+    s_q = np.full(model.n_qt, float(ref_length_m))
     for g in range(nr):
         s_q[3 + 3 * g : 6 + 3 * g] = lengths[g] / (2 * SQ3)
     s_v = s_q / ref_time_s
-    return np.concatenate([s_q, s_v])
+    att = []
+    wheels = []
+    for b in sorted(model.rigid_index):
+        att.extend([1.0] * 4 + [1.0 / ref_time_s] * 3)
+        for w in model.bodies[b].rigid.wheels:
+            wheels.append(w.inertia_kg_m2 * max(1.0 / ref_time_s, abs(w.speed_rad_s), w.max_speed_rad_s))
+    return np.concatenate([s_q, s_v, np.array(att + wheels, float)])

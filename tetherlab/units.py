@@ -50,6 +50,10 @@ MODULUS = Kind("Pa", "an elastic modulus (a pressure)", "70 GPa")
 DENSITY = Kind("kg / m3", "a density", "2700 kg/m3")
 LINEAR_DENSITY = Kind("kg / m", "a linear density", "2 g/m")
 DIMENSIONLESS = Kind("", "a number", "0.5")
+MOMENT_OF_INERTIA = Kind("kg m2", "a moment of inertia", "400 kg m2")
+ANGULAR_RATE = Kind("rad / s", "an angular rate", "0.1 deg/s")
+TORQUE = Kind("N m", "a torque", "0.05 N m")
+ANGULAR_MOMENTUM = Kind("N m s", "an angular momentum (torque x time)", "20 N m s")
 
 _KNOWN_KINDS = (
     LENGTH,

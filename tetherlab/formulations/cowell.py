@@ -1,7 +1,9 @@
 """Cowell's method: the Cartesian equations of motion integrated directly (paper section 2.6).
 
-State layout (SI): y = [q, q'] with q = (r0, d_1, ..., d_N): the root body's inertial position
-and the half-separation vector of every rod (docs/model.md, section 4).  Relative coordinates d_i
+State layout (SI): y = [q, q', attitude, wheels] with q = q_trans = (r0, d_1, ..., d_N, other
+roots): the root bodies' inertial positions and the half-separation vector of every rod
+(docs/model.md, section 4); the first-order attitude and wheel blocks of rigid bodies follow
+(kernel/layout.py, the state-layout descriptor H_NQT, H_OFF_ATT; docs/model.md section 12).  Relative coordinates d_i
 rather than the absolute positions of the TMED masses keep full precision in the tether's shape
 when the orbit radius is thousands of times the rod length.
 """
@@ -11,8 +13,8 @@ from __future__ import annotations
 from numba import carray
 
 from .._jit import rhs_cfunc
-from ..kernel.layout import H_LEN, H_NSTATE
-from ..tether.chain import accelerations
+from ..kernel.layout import H_LEN, H_NQT, H_NSTATE
+from ..tether.chain import system_accelerations
 
 
 @rhs_cfunc
@@ -21,10 +23,10 @@ def cowell_rhs(t, y_ptr, dy_ptr, p_ptr):
     n = int(p[H_NSTATE])
     y = carray(y_ptr, (n,))
     dy = carray(dy_ptr, (n,))
-    h = n // 2
+    h = int(p[H_NQT])
     for i in range(h):
         dy[i] = y[h + i]
-    return accelerations(t, y[:h], y[h:], p, dy[h:])
+    return system_accelerations(t, y[:h], y[h : 2 * h], y[2 * h :], p, dy[h : 2 * h], dy[2 * h :])
 
 
 def cowell_rhs_py(model, y, t=0.0):

@@ -31,7 +31,31 @@ H_FAIL_VAL = 18    # a value describing the failure (e.g. the strain)
 H_MIN_STRAIN = 19  # strain below which a rod counts as collapsed (FAIL_ROD_COLLAPSE)
 H_EV_STOP_R = 20   # stop when the root body's radius falls below this (m; 0 = no such stop)
 H_OFF_FORM = 21    # offset of the formulation's own parameters (DROMO: formulations/dromo.py); 0 = none
-H_SIZE = 24
+# -- state-layout descriptor (issue 10; docs/model.md section 12) ------------------------------------
+# y = [q_trans (NQT), q_trans' (NQT), attitude (7 per rigid body: quaternion w x y z body->inertial,
+#      omega in body axes), wheels (1 per wheel: axial angular momentum h_k)]
+# q_trans = [r of root 0 (3), d of every rod (3 each), r of the other roots (3 each)]
+H_NQT = 22         # length of q_trans: q_trans' starts at NQT, the attitude block at 2 NQT
+H_OFF_ATT = 23     # state index of the attitude block (= 2 NQT)
+H_NRIGID = 24      # number of rigid bodies
+H_OFF_WHL = 25     # state index of the wheel block (= 2 NQT + 7 NRIGID)
+H_NWHEEL = 26      # number of wheels
+H_NBODY = 27       # number of bodies (kernel body order: docs/scenes.md)
+H_OFF_BODY = 28    # offset of the body table
+H_OFF_ORDER = 29   # offset of the tether order (NTETH floats): leaves first (elimination order)
+H_OFF_WT = 30      # offset of the wheel table
+H_OFF_BSCR = 31    # offset of the body scratch (BS_SIZE per body), then tether scratch (TS_SIZE each),
+                   # then wheel scratch (WS_SIZE each), then a 6x6 work area (72)
+H_MU_GG = 32       # mu of the central body for the gravity-gradient torque (0: no central_gravity)
+H_DEFECT = 33      # DEFECT_*: a deliberate defect for negative controls only (never set by a scene)
+H_NROOT = 34       # number of root bodies
+H_OFF_ROOTS = 35   # offset of the root list (NROOT body indices)
+H_SIZE = 40
+
+# -- deliberate defects (negative controls of tests/test_rigid.py only; like MODEL_PRINTED) -------
+DEFECT_NONE = 0
+DEFECT_UNROTATED_ATTACHMENT = 1  # the attachment vector used in body axes as if inertial
+DEFECT_NO_CENTRIPETAL = 2        # omega x (omega x rho) dropped from the attachment acceleration
 
 # -- formulation codes ---------------------------------------------------------------------------
 FORM_COWELL = 1
@@ -62,7 +86,74 @@ TT_TIP_INV_M = 2   # 1/mf of the tip body
 TT_TIP_M = 3       # mf
 TT_MODEL = 4       # MODEL_*
 TT_TENSION_ONLY = 5  # 1: no axial force in compression (slack allowed), kinks located as events
-TT_SIZE = 8
+TT_PARENT = 6      # body index at end A_1 (the root side; kernel order, after any reversal)
+TT_CHILD = 7       # body index at end B_n (-1: free end)
+TT_PA = 8          # attachment point of A_1 on the parent, body axes (3; zero on a point mass)
+TT_SIZE = 12
+
+# -- body table: BT_SIZE floats per body -------------------------------------------------------------
+BT_M = 0           # mass (0 for a fixed body)
+BT_INV_M = 1       # 1/m (0: fixed)
+BT_RIGID = 2       # 1: rigid body
+BT_QOFF = 3        # index in q_trans of its position (roots), -1 otherwise
+BT_PARENT = 4      # tether joining it to its parent (-1: a root)
+BT_AOFF = 5        # state index of its attitude block (rigid), -1 otherwise
+BT_W0 = 6          # index of its first wheel
+BT_NW = 7          # number of wheels
+BT_NCHILD = 8      # number of tethers hanging from it (towards the leaves)
+BT_CTRL = 9        # CTRL_*
+BT_KP = 10         # PD gains (N m per rad, N m s)
+BT_KD = 11
+BT_QT = 12         # target quaternion (4), inertial target
+BT_PT = 16         # its attachment point at the end of its parent tether, body axes (3)
+BT_JS = 19         # J_s = J_B - sum I_k a_k a_k^T (9, body axes): the body with its wheels free
+BT_JB = 28         # J_B, wheels locked (9, body axes): the mass distribution (gravity gradient)
+BT_SIZE = 40
+
+CTRL_NONE = 0
+CTRL_ORBIT = 1     # hold the body's own orbit frame
+CTRL_INERTIAL = 2  # hold a fixed inertial attitude
+
+# -- wheel table: WT_SIZE floats per wheel ------------------------------------------------------------
+WT_BODY = 0
+WT_AX = 1          # axis (3, body axes, unit)
+WT_I = 4           # axial inertia
+WT_MODE = 5        # WMODE_*
+WT_TAU = 6         # constant torque
+WT_MAXW = 7        # speed limit (0: none)
+WT_MAXT = 8        # torque limit (0: none)
+WT_TOFF = 9        # offset of its time table (times then values)
+WT_TN = 10         # points in the table
+WT_PINV = 11       # row k of the pseudo-inverse A^+ of the control wheels' axes (3)
+WT_SIZE = 16
+WMODE_CONST = 0
+WMODE_TABLE = 1
+WMODE_CONTROL = 2
+
+# -- body scratch (BS_SIZE per body) -----------------------------------------------------------------
+BS_R = 0           # centre of mass position (3)
+BS_V = 3           # its velocity (3)
+BS_ROT = 6         # rotation matrix body -> inertial (9, row-major)
+BS_W = 15          # angular velocity, inertial axes (3)
+BS_M = 18          # effective mass matrix (3x3 or 6x6, row-major in 36)
+BS_F = 54          # effective force (3 or 6)
+BS_MI = 60         # its inverse (36)
+BS_A = 96          # acceleration: a_G (3), alpha inertial (3)
+BS_U = 102         # commanded control torque, body axes (3)
+BS_TQ = 105        # gravity-gradient torque, body axes (3)
+BS_C = 108         # compliance of its parent-tether attachment point (3x3): a_B = C J_n + f
+BS_CF = 117        # the free acceleration f of that point (3)
+BS_SIZE = 120
+# tether scratch (TS_SIZE per tether)
+TS_A = 0           # attachment point A_1: position (3) and velocity (3)
+TS_RHO = 6         # rho_A = R rho_b, inertial (3)
+TS_KAP = 9         # kappa_A = omega x (omega x rho_A) (3)
+TS_B = 12          # end B_n: position (3) and velocity (3)
+TS_SIZE = 18
+# wheel scratch (WS_SIZE per wheel)
+WS_TAU = 0         # motor torque applied
+WS_SAT = 1         # 0 none, 1 torque limit, 2 speed limit
+WS_SIZE = 2
 
 # -- rod table: RT_SIZE floats per rod ---------------------------------------------------------------
 RT_M = 0           # rod mass m_i

@@ -1,0 +1,282 @@
+"""Initial state of a forest of bodies and tethers (issue 10): any tree, tethers written in either
+direction, rigid bodies with attachment points, bodies without tethers.
+
+The rules (docs/scenes.md, "Initial layout" and "Body order in the kernel"):
+
+* each tether's rods point from its `from` end to its `to` end along its initial shape (theta, phi,
+  side, strain in the orbit reference's LVLH frame), starting at the attachment point; a tether
+  whose both ends carry explicit states (`Tether.initial is None`) runs straight between the two
+  attachment points;
+* each component is anchored by the orbit reference (a body or the centre of mass) if it holds
+  it, else by its first body with an explicit state;
+* velocities: `motion = "corotating"` gives every point v_a + w_o x (r - r_a) (w_o = r x v / r^2 of
+  the reference orbit), `"translating"` v_a; on top of that the points beyond a rigid body turn
+  with its own rotation relative to that motion, (w_body - w_o) x (r - r_G) (a spinning hub carries
+  its spokes along);
+* a rigid body's attitude "orbit" and its rates relative to the orbit frame use its own centre of
+  mass's (r, v); the layout is repeated three times so that the frames follow the laid-out
+  positions (each pass reduces the change by the ratio of the system's size to the orbit radius).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import SceneError
+from .system import SQ3, Model, attitude_block, center_of_mass
+
+_PASSES = 3
+
+
+def _orbit_frame(r, v):
+    """Columns o1, o2, o3 (docs/scenes.md) and its rate r x v / r^2; None when r x v = 0."""
+    h = np.cross(r, v)
+    hn = float(np.linalg.norm(h))
+    rn = float(np.linalg.norm(r))
+    if not (hn > 0.0 and rn > 0.0):
+        return None, None
+    o3 = -r / rn
+    o2 = -h / hn
+    o1 = np.cross(o2, o3)
+    return np.column_stack([o1, o2, o3]), h / (rn * rn)
+
+
+def _quat_of(R) -> tuple:
+    from scipy.spatial.transform import Rotation
+
+    x, y, z, w = Rotation.from_matrix(R).as_quat()
+    q = np.array([w, x, y, z])
+    return tuple(q / np.linalg.norm(q))
+
+
+def _rot_of_quat(q) -> np.ndarray:
+    from scipy.spatial.transform import Rotation
+
+    w, x, y, z = q
+    return Rotation.from_quat([x, y, z, w]).as_matrix()
+
+
+def body_attitude(body, r, v) -> tuple[np.ndarray, np.ndarray]:
+    """(R body -> inertial, omega in body axes) of a rigid scene body whose centre of mass is at
+    (r, v)."""
+    from scipy.spatial.transform import Rotation
+
+    rig = body.rigid
+    key = f"bodies.{body.name}.rigid"
+    O, w_o = _orbit_frame(np.asarray(r, float), np.asarray(v, float))
+    a = rig.attitude
+    needs_frame = a.kind == "orbit" or a.frame == "orbit"
+    if needs_frame and O is None:
+        raise SceneError(f"{key}.attitude", "an inertial attitude (frame = 'inertial'): the orbit frame is undefined "
+                         "for this body (r x v = 0)", "an attitude relative to the orbit frame")  # fmt: skip
+    if a.kind == "orbit":
+        R = O.copy()
+    else:
+        Rb = _rot_of_quat(a.values) if a.kind == "quaternion" else Rotation.from_euler(a.sequence, a.values).as_matrix()
+        R = O @ Rb if a.frame == "orbit" else Rb
+    w = np.asarray(rig.angular_velocity_rad_s, float)
+    if rig.angular_velocity_frame == "orbit":
+        if O is None:
+            raise SceneError(f"{key}.angular_velocity", "frame = 'body': the orbit frame is undefined for this body "
+                             "(r x v = 0)", "a rate relative to the orbit frame (the default)")  # fmt: skip
+        w = w + R.T @ w_o
+    return R, w
+
+
+def _shape_vectors(scene, t, r_ref, v_ref):
+    """The from -> to rod vectors (n, 3) of a tether laid from its initial shape, and its side."""
+    from .diagnostics import direction_from_angles
+
+    ini = t.initial
+    side = 1.0 if ini.side == "up" else -1.0
+    thetas, phis = ini.rod_angles_rad(t.rods)
+    if ini.shape == "equilibrium":
+        raise SceneError(f"tethers.{t.name}.initial.shape", "'straight' or 'rods' in a tree other than a star of "
+                         "point masses (the statics solve handles one tether on a fixed root)", "'equilibrium'")  # fmt: skip
+    dirs = np.array([direction_from_angles(r_ref, v_ref, th, ph, side) for th, ph in zip(thetas, phis)])
+    seg = t.length_m / t.rods * (1.0 + ini.strain)
+    return dirs * seg, side
+
+
+def forest_state(scene, model: Model, topo, mu: float):
+    """(y0, r_ref, v_ref, sides) for any forest (see the module docstring)."""
+    by_name = {b.name: b for b in scene.bodies}
+    kindex = {b.name: i for i, b in enumerate(model.bodies) if b.name}
+    orbit = scene.orbit
+    if orbit is not None and orbit.motion == "equilibrium":
+        raise SceneError("orbit.motion", "'corotating' or 'translating' for a scene with rigid bodies or a tree other "
+                         "than a star (the relative-equilibrium solve handles stars of point masses)", "'equilibrium'")  # fmt: skip
+    if orbit is not None:
+        ref = orbit.state(mu)
+        if ref is None:
+            ref = by_name[orbit.reference].state(mu)
+        r_ref, v_ref = (np.asarray(x, float) for x in ref)
+        reference = orbit.reference
+        motion = orbit.motion
+    else:
+        root = by_name[topo.roots[0]]
+        r_ref, v_ref = (np.asarray(x, float) for x in root.state(mu))
+        reference = root.name
+        motion = "translating"
+    _, w_o = _orbit_frame(r_ref, v_ref)
+    w_frame = w_o if (motion == "corotating" and w_o is not None) else np.zeros(3)
+
+    # components and their anchors
+    comp_of = {}
+    for ri, root in enumerate(topo.roots):
+        comp_of[root] = ri
+    changed = True
+    while changed:
+        changed = False
+        for k in range(len(topo.tethers)):
+            if topo.parents[k] in comp_of and topo.children[k] not in comp_of:
+                comp_of[topo.children[k]] = comp_of[topo.parents[k]]
+                changed = True
+    anchors = []
+    for ri, root in enumerate(topo.roots):
+        group = [b.name for b in scene.bodies if comp_of.get(b.name) == ri]
+        if reference == "center_of_mass" and ri == 0:
+            anchors.append(("center_of_mass", r_ref, v_ref))
+        elif reference in group:
+            anchors.append((reference, r_ref, v_ref))
+        else:
+            explicit = next((n for n in group if by_name[n].has_state), None)
+            if explicit is None:
+                raise SceneError(f"bodies.{root}", "an explicit state, or tethers joining it to the orbit reference", "neither")
+            r, v = by_name[explicit].state(mu)
+            anchors.append((explicit, np.asarray(r, float), np.asarray(v, float)))
+
+    # tethers in root-first order (parents before children)
+    order = []
+    placed = set(topo.roots)
+    while len(order) < len(topo.tethers):
+        for k in range(len(topo.tethers)):
+            if k not in order and topo.parents[k] in placed:
+                order.append(k)
+                placed.add(topo.children[k])
+
+    sides = [1.0] * len(topo.tethers)
+    nqt = model.n_qt
+    att_states = {}
+    pos_guess = {n: (r_ref, v_ref) for n in kindex}  # each body's (r, v) for its orbit frame
+    y = None
+    for _ in range(_PASSES):
+        # attitudes from the current guess of each body's state
+        R = {}
+        W = {}
+        for n, b in kindex.items():
+            body = by_name[n]
+            if body.rigid is not None:
+                R[n], W[n] = body_attitude(body, *pos_guess[n])
+        pos = {}  # body -> centre of mass, relative to its component's root (anchored later)
+        dvec = {}  # tether -> (n, 3) kernel-order rod vectors (2 sqrt3 d)
+        for ri, root in enumerate(topo.roots):
+            name = anchors[ri][0]
+            if name == root and by_name[root].has_state:
+                pos[root] = np.asarray(by_name[root].state(mu)[0], float)
+            elif name == root and name != "center_of_mass":
+                pos[root] = anchors[ri][1].copy()
+            else:
+                pos[root] = np.zeros(3)
+        for k in order:
+            t = topo.tethers[k]
+            par, ch = topo.parents[k], topo.children[k]
+            spec = model.tethers[k]
+            rho_a = R[par] @ np.asarray(spec.from_point_m) if par in R else np.zeros(3)
+            rho_c = R[ch] @ np.asarray(spec.to_point_m) if ch in R else np.zeros(3)
+            A = pos[par] + rho_a
+            if t.initial is None:  # both ends explicit: straight between the attachment points
+                rc = np.asarray(by_name[ch].state(mu)[0], float)
+                B = rc + rho_c
+                vecs = np.tile((B - A) / t.rods, (t.rods, 1))
+                if np.linalg.norm(B - A) == 0.0:
+                    raise SceneError(f"tethers.{t.name}.to", "attachment points at different positions", "the same point")
+            else:
+                vecs, sides[k] = _shape_vectors(scene, t, r_ref, v_ref)
+                if topo.reversed[k]:
+                    vecs = -vecs[::-1]
+            dvec[k] = vecs
+            pos[ch] = A + vecs.sum(axis=0) - rho_c
+        # anchor the components
+        for ri, root in enumerate(topo.roots):
+            name, ra, _ = anchors[ri]
+            if name == root or name == "center_of_mass":
+                continue
+            shift = ra - pos[name]
+            group = [n for n in pos if comp_of.get(n) == ri]
+            for n in group:
+                pos[n] = pos[n] + shift
+        # assemble y (positions), centre-of-mass reference shifted afterwards
+        y = np.zeros(model.n_state)
+        for ri, root in enumerate(topo.roots):
+            qo = model.root_offset(kindex[root])
+            y[qo : qo + 3] = pos[root]
+        for k, vecs in dvec.items():
+            sl = model.rod_slices[k]
+            y[3 + 3 * sl.start : 3 + 3 * sl.stop] = (vecs / (2.0 * SQ3)).ravel()
+        states = {kindex[n]: (_quat_of(R[n]), tuple(W[n])) for n in R}
+        y[2 * nqt :] = attitude_block(model, states)
+        if anchors[0][0] == "center_of_mass":
+            c, _ = center_of_mass(model, y)
+            shift = r_ref - c
+            for n in list(pos):
+                if comp_of.get(n) == 0:
+                    pos[n] = pos[n] + shift
+            qo = model.root_offset(0)
+            y[qo : qo + 3] = pos[topo.roots[0]]
+        # velocities
+        vel = {}
+        anchor_v = {}
+        for ri, root in enumerate(topo.roots):
+            name, ra, va = anchors[ri]
+            ra = r_ref if name == "center_of_mass" else ra
+            anchor_v[ri] = (ra, va)
+
+        def base_v(ri, r):
+            ra, va = anchor_v[ri]
+            return va + np.cross(w_frame, r - ra)
+
+        extra = {}  # body -> list of (omega_rel, centre) of rigid ancestors (incl. itself)
+        for ri, root in enumerate(topo.roots):
+            vel[root] = base_v(ri, pos[root])
+            if by_name[root].has_state and (anchors[ri][0] != "center_of_mass"):
+                vel[root] = np.asarray(by_name[root].state(mu)[1], float) if anchors[ri][0] == root or orbit is None else vel[root]
+            extra[root] = [(R[root] @ W[root] - w_frame, pos[root])] if root in R else []
+        for k in order:
+            t = topo.tethers[k]
+            par, ch = topo.parents[k], topo.children[k]
+            ri = comp_of[par]
+            ex = extra[par]
+            sl = model.rod_slices[k]
+            if t.initial is None:
+                spec = model.tethers[k]
+                rho_a = R[par] @ np.asarray(spec.from_point_m) if par in R else np.zeros(3)
+                rho_c = R[ch] @ np.asarray(spec.to_point_m) if ch in R else np.zeros(3)
+                wa = R[par] @ W[par] if par in R else np.zeros(3)
+                wc = R[ch] @ W[ch] if ch in R else np.zeros(3)
+                vA = vel[par] + np.cross(wa, rho_a)
+                vch = np.asarray(by_name[ch].state(mu)[1], float)
+                vB = vch + np.cross(wc, rho_c)
+                dd = np.tile((vB - vA) / (2.0 * SQ3 * t.rods), (t.rods, 1))
+                vel[ch] = vch
+            else:
+                d = dvec[k] / (2.0 * SQ3)
+                dd = np.cross(w_frame, d)
+                for om, _c in ex:
+                    dd = dd + np.cross(om, d)
+                v = base_v(ri, pos[ch])
+                for om, cen in ex:
+                    v = v + np.cross(om, pos[ch] - cen)
+                vel[ch] = v
+            y[nqt + 3 + 3 * sl.start : nqt + 3 + 3 * sl.stop] = dd.ravel()
+            extra[ch] = ex + ([(R[ch] @ W[ch] - w_frame, pos[ch])] if ch in R else [])
+        for ri, root in enumerate(topo.roots):
+            qo = model.root_offset(kindex[root])
+            y[nqt + qo : nqt + qo + 3] = vel[root]
+        # a rigid body's velocity is that of its centre of mass; children of rigid parents got it
+        # through their attachment velocities above (the kernel derives non-root states anyway)
+        pos_guess = {n: (pos[n], vel[n]) for n in pos}
+    _ = math
+    return y, r_ref, v_ref, sides
