@@ -870,8 +870,8 @@ def _figure(out: Path, ref: dict, rows: dict) -> None:
     for part, mk in (("A", "o"), ("B", "s")):
         if part not in rows:
             continue
-        good = [r for r in rows[part] if r["EA_scale"] == 1.0]
-        bad = [r for r in rows[part] if r["EA_scale"] != 1.0]
+        good = [r for r in rows[part] if "negative control" not in r["case"]]
+        bad = [r for r in rows[part] if r.get("EA_scale", 1.0) != 1.0]
         ax.loglog([r["rods"] for r in good], [r["tip_radius_error_m"] for r in good], mk + "-", label=f"{part}: tip radius error")
         ax.loglog([r["rods"] for r in good], [r["tip_bound_m"] for r in good], mk + ":", label=f"{part}: bound (first order)")
         ax.loglog([r["rods"] for r in bad], [r["tip_radius_error_m"] for r in bad], mk + "--", alpha=0.6,

@@ -265,6 +265,18 @@ def _rigid_bodies_gates(outdir: Path) -> dict:
         "hub_spoke_centre_tension_over_bound": g.get("hub_spoke_centre_tension_over_bound"),
         "hub_spoke_centre_order_deficit": g.get("hub_spoke_centre_order_deficit"),
         "hub_spoke_centre_negative_control": g.get("hub_spoke_centre_negative_control"),
+        "hub_spoke_radius_tip_over_bound": g.get("hub_spoke_radius_tip_over_bound"),
+        "hub_spoke_radius_tension_over_bound": g.get("hub_spoke_radius_tension_over_bound"),
+        "hub_spoke_radius_order_deficit": g.get("hub_spoke_radius_order_deficit"),
+        "hub_spoke_radius_defects_negative_control": g.get("hub_spoke_radius_defects_negative_control"),
+        "torque_free_over_bound": g.get("torque_free_over_bound"),
+        "torque_free_negative_control": g.get("torque_free_negative_control"),
+        "gg_libration_frequency": g.get("gg_libration_frequency"),
+        "gg_libration_negative_control": g.get("gg_libration_negative_control"),
+        "wheel_exchange_over_bound": g.get("wheel_exchange_over_bound"),
+        "wheels_tumbling_over_bound": g.get("wheels_tumbling_over_bound"),
+        "untethered_bodies_over_bound": g.get("untethered_bodies_over_bound"),
+        "conservation_tree_over_bound": g.get("conservation_tree_over_bound"),
     }
 
 
