@@ -15,11 +15,14 @@ C. torque-free rigid body, both regimes: body rates, inertial H and attitude ove
 D. gravity-gradient libration of a rigid body on a circular orbit: pitch and roll-yaw frequencies.
 E. wheel momentum exchange about a principal axis; conservation of H and E - motor work.
 F. untethered bodies in one scene against single-body runs.
+G. conservation of P, H (and E, energy model) with everything on: an asymmetric tree with rigid
+   bodies, offset attachments and spinning wheels, against round-off bounds.
 
-Parts B-F need tetherlab's rigid bodies (docs/scenes.md, [bodies.NAME.rigid]); when the scene
-layer refuses a rigid body the part is reported as not run (its gates are then "not measured").
+Parts B-G need tetherlab's rigid bodies (docs/scenes.md, [bodies.NAME.rigid]); a build whose
+scene layer refuses a rigid body reports them as not run (their gates are then "not measured",
+which make verify counts as failed).  The whole study takes ~6 min on one core.
 
-    PYTHONPATH=. python studies/rigid_bodies.py OUTDIR [--quick]
+    PYTHONPATH=. python studies/rigid_bodies.py OUTDIR [--parts ABCDEFG] [--quiet]
 """
 
 from __future__ import annotations
@@ -45,6 +48,8 @@ from tetherlab.oracles.continuum import fit_frequencies  # noqa: E402
 
 REFERENCE = ROOT / "references" / "rigid_bodies" / "reference.json"
 U = 2.0**-53  # unit round-off of IEEE double
+#: time series kept for the figure (not written to the JSON summary)
+SERIES: dict = {}
 
 
 def load_reference() -> dict:
@@ -319,6 +324,8 @@ def torque_free_run(ref: dict, case: str, **kw) -> dict:
     # H = C J w: |dH| <= |J| |dw| + |dC| |J w|
     b_h = I.max() * b_w / top.h_N_m_s + b_q
     ang = tf.rotation_angle(tf.attitude(top, t), C)
+    if tuple(kw.get("inertia_scale", (1, 1, 1))) == (1, 1, 1):
+        SERIES[f"torque_free_{case}"] = (t, w, w_or, np.abs(H - top.h_inertial).max(axis=1) / top.h_N_m_s, ang)
     row = {"case": case, "inertia_scale": list(kw.get("inertia_scale", (1, 1, 1))), "periods": periods,
            "rate_error_rad_s": float(np.abs(w - w_or).max()), "rate_bound_rad_s": b_w,
            "H_error_rel": float(np.abs(H - top.h_inertial).max() / top.h_N_m_s), "H_bound_rel": b_h,
@@ -389,6 +396,8 @@ def gg_run(ref: dict, kind: str, inertia=None) -> dict:
         f = np.sort(np.concatenate([fit_frequencies(t, dg[f"sat.{c}_rad"].to_numpy(), exp)[0] for c in ("roll", "yaw")]))
         exp = np.sort(np.concatenate([exp, exp]))
     err = float(np.max(np.abs(f / exp - 1.0)))
+    if inertia is None:
+        SERIES[f"gg_{kind}"] = (t, dg["sat.roll_rad"].to_numpy(), dg["sat.pitch_rad"].to_numpy(), dg["sat.yaw_rad"].to_numpy(), n)
     return {"case": f"{kind} libration", "inertia": list(inertia or (Ix, Iy, Iz)),
             "measured_over_n": (f / n).tolist(), "expected_over_n": (exp / n).tolist(),
             "frequency_error_rel": err, "budget_rel": gg_budget(ref),
@@ -451,6 +460,7 @@ def wheel_run(ref: dict, torque_N_m: float = 0.3, duration_s: float = 10.0) -> d
     # Runge-Kutta method integrates exactly, so round-off is all there is.
     S_H = float(np.max(c["J_kg_m2"] * np.abs(w_or) + c["Iw_kg_m2"] * np.abs(Om_or)))
     S_E = float(np.max(sa.energy(t)))
+    SERIES["wheel"] = (t, w[:, 2], Om, w_or, Om_or, c["J_kg_m2"], c["Iw_kg_m2"])
     B_H = 4.0 * U * math.sqrt(N) * S_H * 2
     B_E = 4.0 * U * math.sqrt(N) * S_E * 4
     return {"case": f"single-axis wheel, torque {torque_N_m} N m", "rate_error_rad_s": float(np.abs(w[:, 2] - w_or).max()),
@@ -850,13 +860,69 @@ def write_report(out: Path, ref: dict, rows: dict, gates: dict, notes: dict) -> 
     (out / "rigid_bodies.md").write_text("\n".join(lines))
 
 
+def _figure_rigid(axes, ref: dict) -> None:
+    """Top right: wheel exchange; second row: torque-free rates (simulator dots on the closed
+    form), their errors, libration."""
+    ax = axes[0][2]
+    if "wheel" in SERIES:
+        t, wz, Om, w_or, Om_or, J, Iw = SERIES["wheel"]
+        ax.plot(t, -(J - Iw) * (w_or - w_or[0]), "C0-", lw=1, label="closed form: -(J - Iw) dw")
+        ax.plot(t, Iw * ((w_or + Om_or) - (w_or[0] + Om_or[0])), "C1--", lw=1, label="closed form: wheel's gain d[Iw (w + Omega)]")
+        ax.plot(t[::4], -(J - Iw) * (wz[::4] - wz[0]), "k.", ms=4, label="tetherlab: -(J - Iw) dw")
+        ax.plot(t[::4], Iw * ((wz[::4] + Om[::4]) - (wz[0] + Om[0])), "kx", ms=4, label="tetherlab: wheel's gain")
+        ax.set_title("Wheel motor 0.3 N m about a principal axis: exchange")
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel("angular momentum (N m s)")
+        ax.legend(fontsize=7)
+    else:
+        ax.axis("off")
+    ax = axes[1][0]
+    if "torque_free_minor" in SERIES:
+        t, w, w_or, _, _ = SERIES["torque_free_minor"]
+        for j, c in enumerate("xyz"):
+            ax.plot(t, w_or[:, j], "-", lw=1, label=f"closed form w{c}")
+            ax.plot(t[::10], w[::10, j], "k.", ms=3)
+        ax.set_title("Torque-free body, minor-axis case: tetherlab (dots) on the closed form")
+        ax.set_xlabel("t (s)")
+        ax.set_ylabel("body rate (rad/s)")
+        ax.legend(fontsize=7)
+    ax = axes[1][1]
+    for case, mk in (("major", "-"), ("minor", "--")):
+        if f"torque_free_{case}" not in SERIES:
+            continue
+        t, w, w_or, dh, ang = SERIES[f"torque_free_{case}"]
+        ax.semilogy(t, np.maximum(np.abs(w - w_or).max(axis=1), 1e-18), "C0" + mk, lw=1, label=f"{case}: |w - w_oracle| (rad/s)")
+        ax.semilogy(t, np.maximum(dh, 1e-18), "C1" + mk, lw=1, label=f"{case}: |H - H0| / |H|")
+        ax.semilogy(t, np.maximum(ang, 1e-18), "C2" + mk, lw=1, label=f"{case}: attitude error (rad)")
+    ax.set_title("Torque-free body: errors against the oracle (rtol 1e-12)")
+    ax.set_xlabel("t (s)")
+    ax.legend(fontsize=7)
+    ax = axes[1][2]
+    for kind, cols in (("pitch", (2,)), ("roll-yaw", (1, 3))):
+        if f"gg_{kind}" not in SERIES:
+            continue
+        ser = SERIES[f"gg_{kind}"]
+        t, n = ser[0], ser[4]
+        for c in cols:
+            name = {1: "roll", 2: "pitch", 3: "yaw"}[c]
+            ax.plot(t * n / (2 * math.pi), ser[c] * 1e3, lw=0.8, label=f"{name} ({kind} run)")
+    g = ref["gravity_gradient"]
+    ax.set_title(f"Gravity-gradient libration: pitch {g['pitch_over_n']:.4f} n, roll-yaw "
+                 f"{g['roll_yaw_over_n'][0]:.4f} n, {g['roll_yaw_over_n'][1]:.4f} n", fontsize=9)  # fmt: skip
+    ax.set_xlabel("orbits")
+    ax.set_ylabel("angle (mrad)")
+    ax.legend(fontsize=7)
+
+
 def _figure(out: Path, ref: dict, rows: dict) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    fig, axes = plt.subplots(2, 3, figsize=(17, 9))
+    _figure_rigid(axes, ref)
+    axes = axes[0]
     h = ref["hub_spoke"]
     ax = axes[0]
     for case, mk in (("centre", "-"), ("radius", "--")):
@@ -882,7 +948,7 @@ def _figure(out: Path, ref: dict, rows: dict) -> None:
     ax.legend(fontsize=7)
     from tetherlab.provenance import stamp_figure
 
-    stamp_figure(fig, "studies/rigid_bodies.py; references/rigid_bodies (tetherlab/oracles/spinning_spokes.py)")
+    stamp_figure(fig, "studies/rigid_bodies.py; references/rigid_bodies (tetherlab/oracles/{spinning_spokes, torque_free, gg_attitude}.py)")
     fig.tight_layout()
     fig.savefig(out / "rigid_bodies.png", dpi=110)
     plt.close(fig)
