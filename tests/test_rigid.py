@@ -700,3 +700,58 @@ def test_rigid_bodies_refuse_dromo():
     with pytest.raises(SceneError) as info:
         prepare(Scene.from_dict(d))
     assert info.value.key == "integrator.formulation"
+
+
+# ------------------------------------------------------------------------------------------------
+# attitude control
+# ------------------------------------------------------------------------------------------------
+def test_pd_control_follows_its_single_axis_ode():
+    # free body at rest, 40 deg off an inertial target about z, three axis wheels under the PD law
+    # (docs/model.md 12.6).  Body + wheels start with H = 0 and no external torque acts, so
+    # J_s omega + h_w = 0 for ever and the gyroscopic term vanishes: the motion stays about z and
+    # the yaw angle obeys exactly  J_s,zz th'' = -kp 2 sin(th/2) - kd th'  (J_s,zz = J_zz - I_wz),
+    # integrated here by scipy (rtol 1e-12) as the reference.
+    from scipy.integrate import solve_ivp
+
+    kp, kd, Jzz, Iw, th0 = 0.5, 4.0, 12.0, 0.05, math.radians(40.0)
+    wheels = {n: {"axis": a, "inertia": f"{Iw} kg m2", "torque": "control"}
+              for n, a in (("wx", [1, 0, 0]), ("wy", [0, 1, 0]), ("wz", [0, 0, 1]))}
+    q0 = [math.cos(th0 / 2), 0.0, 0.0, math.sin(th0 / 2)]
+    sc = _free_body(wheels, duration="60 s", count=13,
+                    control={"target": {"quaternion": [1.0, 0.0, 0.0, 0.0]}, "kp": f"{kp} N m", "kd": f"{kd} N m s"})
+    sc = sc.replace(**{"bodies.b.rigid.attitude": {"quaternion": q0}})
+    res = simulate(sc, progress=False)
+    ts = res.timeseries
+    t = ts["t_s"].to_numpy()
+    yaw = 2 * np.arctan2(ts["b.qz"].to_numpy(), ts["b.qw"].to_numpy())
+    Js = Jzz - Iw
+    ref = solve_ivp(lambda _t, x: [x[1], (-kp * 2 * math.sin(x[0] / 2) - kd * x[1]) / Js], (0, t[-1]), [th0, 0.0],
+                    t_eval=t, rtol=1e-12, atol=1e-14, method="DOP853")
+    assert np.max(np.abs(yaw - ref.y[0])) <= 1e-8
+    # the commanded torque at t = 0 is -kp e with e = 2 sin(th0/2) z (omega = 0), the z wheel's
+    # motor torque its opposite (tau = -A^+ u, A = I)
+    d = res.diagnostics
+    assert d["b.control_z_N_m"].iloc[0] == pytest.approx(-kp * 2 * math.sin(th0 / 2), rel=1e-14)
+    assert d["b.wz.torque_N_m"].iloc[0] == pytest.approx(kp * 2 * math.sin(th0 / 2), rel=1e-14)
+    assert abs(d["b.control_x_N_m"].iloc[0]) < 1e-15 and abs(d["b.control_y_N_m"].iloc[0]) < 1e-15
+
+
+def test_radau5_second_order_split_with_the_attitude_block():
+    # The driver passes RADAU5 M1 = NQT (y = [q, q', attitude, wheels], q' exact for the first NQT
+    # components; docs/model.md 12.1).  The reduced Newton systems are exact reformulations of
+    # the full ones, so the run matches the full-Newton run (M1 = 0) up to the Newton stopping
+    # and round-off in each step: bound N_steps x atol per component (the local tolerance summed
+    # over the steps taken).
+    from tetherlab.formulations.cowell import cowell_rhs
+    from tetherlab.integrators.driver import integrate
+
+    sc = rigid_tree_scene().replace(duration="5 s")
+    prep = prepare(sc)
+    runs = {}
+    for m1 in (prep.model.n_qt, 0):
+        p = prep.model.fresh_params()
+        runs[m1] = integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, p, 1e-9, prep.atol * 1e-1, second_order=m1)
+        assert runs[m1].status == 0
+    n_steps = runs[0].stats["n_accepted"] + runs[0].stats["n_rejected"]
+    diff = np.abs(runs[prep.model.n_qt].y - runs[0].y) / (prep.atol * 1e-1)
+    assert diff.max() <= n_steps

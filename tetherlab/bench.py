@@ -143,6 +143,7 @@ def _print_table(title, rows):
 EXTRA_SECTIONS = (
     ("stiefel", "Stiefel-Scheifele: tetherlab's best method against heyoka at 1 m and 1 mm final error (issue 3)"),
     ("deorbit", "Electrodynamic de-orbit, n = 1, whole mission, every integrator (issue 3)"),
+    ("rigid", "Right-hand-side cost: rigid root + 3 wheels + 4 tethers against the point-mass hub (issue 10)"),
 )
 
 

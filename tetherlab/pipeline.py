@@ -677,10 +677,9 @@ def _integrate_cowell(prep: Prepared, p: np.ndarray, progress):
         h_max=prep.h_max,
         max_steps=prep.max_steps,
         progress=progress,
-        # Cowell: y = [q, q', ...] with q' exact: RADAU5 halves its Newton systems.  Its reduced
-        # form needs n = 2 M1 (integrators/radau5.py), so a scene with an attitude block (first
-        # order, appended) runs the full Newton system: M1 = 0, correct but without the saving.
-        second_order=not prep.model.has_attitude,
+        # Cowell: y = [q, q', attitude, wheels] with q' exact for the first NQT components (the
+        # state-layout descriptor): RADAU5 reduces its Newton systems to n - NQT unknowns
+        second_order=True if not prep.model.has_attitude else prep.model.n_qt,
         **_event_args(prep),
     )
 

@@ -278,6 +278,8 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     the whole run.  ``progress(t)`` is called after each chunk of about ``chunk_seconds``.
     ``fixed_step``: constant steps of ``h0`` without error control (native methods only; for
     convergence studies).  ``second_order``: the state is y = [q, v] with q' = v exactly (Cowell);
+    an integer M1 instead: y = [q, v, w] with q' = v for the first M1 components and a first-order
+    rest w (Hairer's M1 = M2; the attitude and wheel blocks of rigid bodies);
     RADAU5 then solves reduced Newton systems of half the size (same steps, less linear
     algebra); other methods ignore it.  ``event``: a cfunc with the rhs ABI writing ``n_events``
     values g(t, y) (native methods only); every change of side of a component (g < 0 vs g >= 0)
@@ -303,11 +305,14 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     compile_s = warm_up(method, rhs, n, p)
     y_out = np.empty((m, n))
     stats = np.zeros(8, dtype=np.int64)
-    if not isinstance(second_order, (bool, np.bool_)):
-        raise ValueError(f"second_order: expected a bool; got {second_order!r}")
-    if second_order and n % 2:
-        raise ValueError(f"second_order: expected an even state length (y = [q, v]); got {n}")
-    m1 = n // 2 if second_order else 0
+    if isinstance(second_order, (bool, np.bool_)):
+        if second_order and n % 2:
+            raise ValueError(f"second_order: expected an even state length (y = [q, v]); got {n}")
+        m1 = n // 2 if second_order else 0
+    elif isinstance(second_order, (int, np.integer)) and 0 <= second_order and 2 * second_order <= n:
+        m1 = int(second_order)  # y = [q (m1), v (m1), first-order rest]: the state-layout descriptor's NQT
+    else:
+        raise ValueError(f"second_order: expected a bool or an integer M1 with 0 <= 2 M1 <= n = {n}; got {second_order!r}")
     ws = radau5_workspace(n, m1) if method == "radau5" else ()
     ev = _NO_EV.copy()
     events = []

@@ -112,13 +112,15 @@ _I_M1 = 6  # second-order structure: y'_i = y_{i+M1} for i < M1 (0 = none), set 
 def radau5_workspace(n, m1=0):
     """Arrays that carry RADAU5's state between calls of :func:`radau5_core`.
 
-    ``m1 > 0`` declares Hairer's special structure (RADAU5's M1 = M2): n = 2 m1 and the first m1
-    components have the next m1 as their exact derivatives (y = [q, v], q' = v, as in Cowell's
-    formulation).  Then J = [[0, I], [A_q, A_v]] and both Newton systems reduce to m1 x m1 ones
-    (docs/integrators.md): the LU work falls by 8x and each solve by about 4x.
+    ``m1 > 0`` declares Hairer's special structure (RADAU5's M1 = M2): the first m1 components have
+    the next m1 as their exact derivatives (y = [q, v, w], q' = v, as in Cowell's formulation; w:
+    first-order components appended, e.g. attitude and wheels, n >= 2 m1).  Then
+    J = [[0, I, 0], [A_q, A_v, A_w], [B_q, B_v, B_w]] and both Newton systems reduce to
+    (n - m1) x (n - m1) ones (docs/integrators.md): for n = 2 m1 the LU work falls by 8x and each
+    solve by about 4x.
     """
-    if m1 < 0 or (m1 > 0 and n != 2 * m1):
-        raise ValueError(f"m1: expected 0 or n/2 = {n / 2:g} (second-order structure); got {m1}")
+    if m1 < 0 or 2 * m1 > n:
+        raise ValueError(f"m1: expected 0 <= m1 <= n/2 = {n / 2:g} (second-order structure); got {m1}")
     ne = n - m1
     ws = (
         np.zeros((n, n)),  # fjac
@@ -262,9 +264,10 @@ def _decompose(fjac, h, e1, e2, ip1, ip2, stats, m1):
     else:
         inv1 = 1.0 / fac1
         inv2 = 1.0 / fac2
-        for i in range(m1):
-            for j in range(m1):
-                aq = fjac[m1 + i, j]
+        ne = n - m1  # v rows (m1) then any first-order rows appended after [q, v] (Hairer's M1 < n/2)
+        for i in range(ne):
+            for j in range(ne):
+                aq = fjac[m1 + i, j] if j < m1 else 0.0
                 av = fjac[m1 + i, m1 + j]
                 e1[i, j] = -av - aq * inv1
                 e2[i, j] = -av - aq * inv2
@@ -285,7 +288,7 @@ def _solve(e, ip, fjac, g, m1, b):
         lu_solve(e, ip, b)
         return
     inv = 1.0 / g
-    for i in range(m1):
+    for i in range(fjac.shape[0] - m1):
         s = 0.0 * b[0]
         for j in range(m1):
             s += fjac[m1 + i, j] * b[j]
