@@ -342,7 +342,19 @@ def part_torque_free(ref: dict) -> tuple[list, dict]:
     ctrl = torque_free_run(ref, "major", inertia_scale=(1.0, 1.0 + 1e-4, 1.0))
     ctrl["case"] += " (negative control: I2 x (1 + 1e-4))"
     over = max(r["over_bound"] for r in rows)
-    return rows + [ctrl], {"torque_free_over_bound": over, "torque_free_negative_control": 1.0 / ctrl["over_bound"]}
+    # tolerance proportionality (Hairer, Norsett & Wanner I, sect. II.4: global error ~ C tol^a,
+    # a near 1): two decades looser must raise the error by >= one decade (rate >= 0.5 per
+    # decade, half of a), or the run's error is not the integrator's and the bound means little
+    loose = [torque_free_run(ref, case, rtol=1e-10) for case in ("major", "minor")]
+    rates = []
+    for tight, lo in zip(rows, loose):
+        e1 = max(lo["rate_error_rad_s"], 1e-300)
+        e2 = max(tight["rate_error_rad_s"], 1e-300)
+        rate = math.log10(e1 / e2) / 2.0
+        lo["case"] += f" (rtol 1e-10: convergence rate {rate:.2f} per decade)"
+        rates.append(rate)
+    return rows + loose + [ctrl], {"torque_free_over_bound": over, "torque_free_negative_control": 1.0 / ctrl["over_bound"],
+                                   "torque_free_convergence": 0.5 / max(min(rates), 1e-300)}  # fmt: skip
 
 
 # ==================================================================================================

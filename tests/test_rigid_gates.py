@@ -88,6 +88,7 @@ def test_torque_free_gate():
     _, g = study.part_torque_free(REF)
     assert g["torque_free_over_bound"] <= 1.0
     assert g["torque_free_negative_control"] <= 1.0  # I2 x (1 + 1e-4) is seen
+    assert g["torque_free_convergence"] <= 1.0  # the error falls with the tolerance
 
 
 @pytest.mark.slow

@@ -271,6 +271,7 @@ def _rigid_bodies_gates(outdir: Path) -> dict:
         "hub_spoke_radius_defects_negative_control": g.get("hub_spoke_radius_defects_negative_control"),
         "torque_free_over_bound": g.get("torque_free_over_bound"),
         "torque_free_negative_control": g.get("torque_free_negative_control"),
+        "torque_free_convergence": g.get("torque_free_convergence"),
         "gg_libration_frequency": g.get("gg_libration_frequency"),
         "gg_libration_negative_control": g.get("gg_libration_negative_control"),
         "wheel_exchange_over_bound": g.get("wheel_exchange_over_bound"),
