@@ -291,6 +291,7 @@ STUDIES = [
     ("Rod-count convergence", "convergence", ["--quiet"], "convergence.md", None),
     ("What accuracy costs in time (work-precision)", "workprecision", ["--quiet"], "work_precision.md", None),
     ("Hard cases", "hard_cases", ["--quiet"], "hard_cases.md", _hard_cases_gates),
+    ("Rigid bodies, wheels, attitude control and tether trees (issue 10)", "rigid_scenes", [], "rigid_scenes.md", None),
     ("Rigid bodies, wheels and hub-and-spoke against the oracles (issue 10)", "rigid_bodies", ["--quiet"],
      "rigid_bodies.md", _rigid_bodies_gates),
 ]

@@ -20,6 +20,7 @@ from numba import carray
 from .._jit import rhs_cfunc
 from .layout import (
     H_EV_STOP_R,
+    H_NQT,
     H_LEN,
     H_NSTATE,
     H_NTETH,
@@ -43,7 +44,7 @@ def system_events(t, y_ptr, g_ptr, p_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     n = int(p[H_NSTATE])
     y = carray(y_ptr, (n,))
-    h = n // 2
+    h = int(p[H_NQT])  # q_trans' starts here (state-layout descriptor; attitude blocks follow)
     k = 0
     r_stop = p[H_EV_STOP_R]
     if r_stop > 0.0:
