@@ -399,7 +399,7 @@ def _formulation(scene, model: Model, tethers, y0: np.ndarray, events: bool = Fa
         # DROMO's time form integrates the root's orbit in elements; the attitude and wheel blocks
         # are not carried through its state conversion yet
         raise SceneError(key, "'cowell' for a scene with rigid bodies (attitude and wheel states)", repr(name))
-    if name == "dromo" and not tethers and not events:
+    if name == "dromo" and not tethers and not events and len(model.bodies) == 1:
         if scene.integrator.max_step_s is not None:
             raise SceneError(
                 "integrator.max_step", "no max_step with formulation 'dromo' on a point mass (the independent "

@@ -553,6 +553,31 @@ def _hard_cases_gates(outdir: Path) -> dict:
     }
 
 
+def _rigid_bodies_gates(outdir: Path) -> dict:
+    """Gates of studies/rigid_bodies.py (issue 10; bounds in docs/rigid-oracles.md section 7).
+    A part the build cannot run (no rigid bodies) leaves its gates None: "not measured"."""
+    g = json.loads((outdir / "rigid_bodies_summary.json").read_text())["gates"]
+    return {
+        "hub_spoke_centre_tip_over_bound": g.get("hub_spoke_centre_tip_over_bound"),
+        "hub_spoke_centre_tension_over_bound": g.get("hub_spoke_centre_tension_over_bound"),
+        "hub_spoke_centre_order_deficit": g.get("hub_spoke_centre_order_deficit"),
+        "hub_spoke_centre_negative_control": g.get("hub_spoke_centre_negative_control"),
+        "hub_spoke_radius_tip_over_bound": g.get("hub_spoke_radius_tip_over_bound"),
+        "hub_spoke_radius_tension_over_bound": g.get("hub_spoke_radius_tension_over_bound"),
+        "hub_spoke_radius_order_deficit": g.get("hub_spoke_radius_order_deficit"),
+        "hub_spoke_radius_defects_negative_control": g.get("hub_spoke_radius_defects_negative_control"),
+        "torque_free_over_bound": g.get("torque_free_over_bound"),
+        "torque_free_negative_control": g.get("torque_free_negative_control"),
+        "torque_free_convergence": g.get("torque_free_convergence"),
+        "gg_libration_frequency": g.get("gg_libration_frequency"),
+        "gg_libration_negative_control": g.get("gg_libration_negative_control"),
+        "wheel_exchange_over_bound": g.get("wheel_exchange_over_bound"),
+        "wheels_tumbling_over_bound": g.get("wheels_tumbling_over_bound"),
+        "untethered_bodies_over_bound": g.get("untethered_bodies_over_bound"),
+        "conservation_tree_over_bound": g.get("conservation_tree_over_bound"),
+    }
+
+
 #: (title, study script in studies/, its arguments after OUTDIR, markdown it writes, gate reader)
 STUDIES = [
     ("Catenary against Irvine's elastic catenary (paper section 4.2)", "catenary", [], "catenary.md", _catenary_gates),
@@ -564,6 +589,9 @@ STUDIES = [
     ("What accuracy costs in time (work-precision)", "workprecision", ["--quiet"], "work_precision.md", None),
     ("Hard cases", "hard_cases", ["--quiet"], "hard_cases.md", _hard_cases_gates),
     ("Fidelity ladder: the de-orbit at each environment level (issue 13)", "fidelity", ["--quiet"], "fidelity.md", None),
+    ("Rigid bodies, wheels, attitude control and tether trees (issue 10)", "rigid_scenes", [], "rigid_scenes.md", None),
+    ("Rigid bodies, wheels and hub-and-spoke against the oracles (issue 10)", "rigid_bodies", ["--quiet"],
+     "rigid_bodies.md", _rigid_bodies_gates),
 ]
 
 

@@ -20,6 +20,7 @@ from numba import carray
 from .._jit import njit, rhs_cfunc
 from .layout import (
     H_EV_STOP_R,
+    H_NQT,
     H_LEN,
     H_NSTATE,
     H_NTETH,
@@ -43,7 +44,7 @@ def event_values(t, y, g_ptr, p):
     """The event components of the Cowell state y (length p[H_NSTATE]) into g_ptr[0..]; also
     called by other formulations on the Cowell state they rebuild (formulations/dromo.py)."""
     n = int(p[H_NSTATE])
-    h = n // 2
+    h = int(p[H_NQT])  # q_trans' starts here (state-layout descriptor; attitude blocks follow)
     k = 0
     r_stop = p[H_EV_STOP_R]
     if r_stop > 0.0:

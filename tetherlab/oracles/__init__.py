@@ -2,6 +2,10 @@
 
 ``bead``: the lumped-mass tether model with its own right-hand side; ``bead_scene``: its initial
 state from a scene; ``continuum``: closed-form and ODE references for a continuous tether.
+Rigid bodies (issue 10, docs/rigid-oracles.md): ``torque_free`` (closed-form torque-free
+asymmetric body, Jacobi elliptic functions), ``gg_attitude`` (gravity-gradient libration
+frequencies and a nonlinear attitude integration), ``spinning_spokes`` (steady hub-and-spoke
+tethers in free space), ``wheel_exchange`` (momentum exchange with wheels).
 None of them imports the TMED tether code (``tetherlab.tether``, ``tetherlab.system``,
 ``tetherlab.kernel.effects``).
 """
