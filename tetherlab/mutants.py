@@ -20,7 +20,8 @@ How a defect is switched on, and why it can never reach a user's run:
   only.
 
 The defects of the rigid-body issue (attachment vector not rotated, omega x (omega x r) dropped)
-have their slots below, ``status = "pending"``, filled when branch ``rigid`` lands.
+are run by studies/rigid_bodies.py itself (no cheap probe exercises a rigid body); verify credits
+them from that study's control gate, as it credits eq. 20 from the hard cases' control.
 
 Use (verification only)::
 
@@ -269,23 +270,25 @@ MUTANTS = {
             mutate=_flag(L.MUT_NO_ELASTIC_E),
             path="diagnostics",
         ),
-        # -- slots for the rigid-body defects of issue 10 (branch rigid): filled when it lands
+        # -- the rigid-body defects of issue 10: the kernel's DEFECT_* codes in the same header slot.
+        # No cheap probe of the harness runs a rigid body; studies/rigid_bodies.py runs both itself
+        # (part B, rigid hub at a radius) and verify credits them from its control gate.
         Mutant(
             "rigid_attachment_not_rotated",
             "a tether's attachment vector on a rigid body used in body axes, not rotated to inertial",
-            "(pending: branch rigid, issue 10)",
-            "paper eqs. 44-49 (rigid central body)",
-            (),
-            status="pending",
+            "tether/chain.py attachment kinematics (p[H_MUTANT] = MUT_UNROTATED_ATTACHMENT)",
+            "paper eq. 47 as corrected in docs/model.md section 12 (rho = R rho_b)",
+            ("hub_spoke_radius_tip_over_bound", "hub_spoke_radius_defects_negative_control"),
+            mutate=_flag(L.MUT_UNROTATED_ATTACHMENT),
             path="rigid",
         ),
         Mutant(
             "rigid_centripetal_dropped",
             "omega x (omega x r) dropped from the attachment point's acceleration",
-            "(pending: branch rigid, issue 10)",
-            "paper eqs. 44-49 (rigid central body)",
-            (),
-            status="pending",
+            "tether/chain.py attachment kinematics (p[H_MUTANT] = MUT_NO_CENTRIPETAL)",
+            "paper eq. 47 (the rigid-body acceleration of a body-fixed point)",
+            ("hub_spoke_radius_tip_over_bound", "hub_spoke_radius_defects_negative_control"),
+            mutate=_flag(L.MUT_NO_CENTRIPETAL),
             path="rigid",
         ),
     )

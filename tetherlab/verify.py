@@ -712,6 +712,31 @@ TOOTHLESS = {
     "hard_cases_convergence_score": "not probed: as hard_cases_failed",
     "hard_cases_floor_over_loose_change": "not probed: a property of the tolerance ladders chosen, not of the code",
     "hard_cases_collapse_stop_spread": "not probed: as hard_cases_failed",
+    "hub_spoke_centre_tip_over_bound": "not probed: the rigid-body study runs minutes; the registry has no defect "
+    "on a point-mass hub's steady spin that the cheap probes miss, and the study's own control (a 1 % stiffer "
+    "tether, hub_spoke_centre_negative_control) shows the order gate sees a stiffness error",
+    "hub_spoke_centre_tension_over_bound": "not probed: as hub_spoke_centre_tip_over_bound",
+    "hub_spoke_centre_order_deficit": "not probed by the registry: its own control is "
+    "hub_spoke_centre_negative_control (a 1 % stiffer tether fails it)",
+    "hub_spoke_centre_negative_control": "a control itself (must pass: the order gate fails a 1 % stiffer tether)",
+    "hub_spoke_radius_tension_over_bound": "not probed: the rigid attachment defects are run and credited through "
+    "hub_spoke_radius_tip_over_bound (the study's part B)",
+    "hub_spoke_radius_order_deficit": "not probed: as hub_spoke_radius_tension_over_bound",
+    "torque_free_over_bound": "not probed by the registry (no defect of the attitude kinematics in it yet): the "
+    "study's own control perturbs the inertia by 1e-4 (torque_free_negative_control)",
+    "torque_free_negative_control": "a control itself (a 1e-4 inertia error must fail torque_free_over_bound)",
+    "torque_free_convergence": "not probed: the integrator's convergence on the torque-free body (a property of "
+    "the tolerance ladder, as hard_cases_floor_over_loose_change)",
+    "gg_libration_frequency": "not probed by the registry (no gravity-gradient-torque defect in it yet): the "
+    "study's own control perturbs the inertia (gg_libration_negative_control)",
+    "gg_libration_negative_control": "a control itself (a perturbed inertia must fail gg_libration_frequency)",
+    "wheel_exchange_over_bound": "not probed: no wheel defect in the registry yet; an exact first integral "
+    "(H, and energy minus motor work) within a derived round-off bound",
+    "wheels_tumbling_over_bound": "not probed: as wheel_exchange_over_bound",
+    "untethered_bodies_over_bound": "not probed: compares a forest against single-body runs of the same kernel; a "
+    "model defect moves both alike (it guards the forest's bookkeeping)",
+    "conservation_tree_over_bound": "not probed by the harness (the study runs minutes); tests/test_rigid.py runs "
+    "the two attachment defects against the same first integrals and both fail them by > 1e6 x the bound",
     "mutation_uncaught_defects": "the mutation score itself",
     "mutation_toothless_unexplained": "the count of gates without teeth or reason itself",
 }
@@ -792,6 +817,14 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         by_defect.setdefault("eq20_printed_sign", []).append("hard_cases_invariant_over_bound")
         by_gate.setdefault("hard_cases_invariant_over_bound", []).append("eq20_printed_sign")
         by_gate.setdefault("hard_cases_negative_control", []).append("eq20_printed_sign")
+    # the rigid-body study runs the kernel's two attachment defects itself (part B): its control
+    # gate passes only if the tip-radius measure fails under both (studies/rigid_bodies.py)
+    ctrl = study_values.get("hub_spoke_radius_defects_negative_control")
+    if ctrl is not None and ctrl <= gates["hub_spoke_radius_defects_negative_control"]["threshold"]:
+        for d in ("rigid_attachment_not_rotated", "rigid_centripetal_dropped"):
+            by_defect.setdefault(d, []).append("hub_spoke_radius_tip_over_bound")
+            by_gate.setdefault("hub_spoke_radius_tip_over_bound", []).append(d)
+            by_gate.setdefault("hub_spoke_radius_defects_negative_control", []).append(d)
     uncaught = [d for d, gs in by_defect.items() if not gs]
     unexplained = [g for g, ds in by_gate.items() if not ds and g not in TOOTHLESS]
     return by_defect, by_gate, {"mutation_uncaught_defects": float(len(uncaught)),
