@@ -234,6 +234,9 @@ def run(repeats: int = 15, case: str = "ex2") -> list[dict]:
             "heyoka_wall_s": h_wall,
             "heyoka_steps": hpick["steps"] if hpick else None,
             "ratio_tetherlab_over_heyoka": (best_wall / h_wall) if best and hpick else None,
+            # when a target is out of reach: the best error each side reached on the grid
+            "tetherlab_best_error_m": float(np.nanmin([r["error_m"] for r in tl])),
+            "heyoka_best_error_m": float(np.nanmin([r["error_m"] for r in hk])),
             "tetherlab_cost_exponent": cost_exponent(tl, best["who"]) if best else None,
             "heyoka_cost_exponent": cost_exponent(hk, "heyoka double"),
             "ratio_of_medians": (medians[ib] / medians[-1]) if best and hpick else None,
