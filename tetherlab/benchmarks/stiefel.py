@@ -68,11 +68,8 @@ def runner(formulation: str, method: str, tol: float, case: str = "ex2"):
 
     if formulation not in ("cowell", "dromo"):
         raise ValueError(f"formulation: expected 'cowell' or 'dromo'; got {formulation!r}")
-    # "abm" (DROMO sigma form only) is not a scene method: the scene is prepared with vern9 (its
-    # starter) and the method is named to the DROMO driver directly
     scene = load_scene(CASES[case][0]).replace(**{
-        "integrator.method": "vern9" if method == "abm" else method, "integrator.rtol": tol,
-        "integrator.atol": tol,
+        "integrator.method": method, "integrator.rtol": tol, "integrator.atol": tol,
         "integrator.formulation": formulation, "output.count": 2,
     })  # fmt: skip
     prep = prepare(scene)
