@@ -79,7 +79,7 @@ def test_slack_and_taut_switches_with_dromo_match_cowell():
 
 
 def test_abm_is_a_sigma_form_method_only():
-    """'abm' (docs/integrators.md section 6) runs the DROMO sigma form; elsewhere it is refused
+    """'abm' (docs/integrators.md section 8) runs the DROMO sigma form; elsewhere it is refused
     naming integrator.method."""
     from tetherlab.errors import SceneError
 

@@ -219,7 +219,7 @@ def prepare(scene) -> Prepared:
     if scene.integrator.method == "abm" and formulation != "dromo-sigma":
         raise SceneError(
             "integrator.method", "'abm' only with formulation 'dromo' on a single body without events (the DROMO "
-            "sigma form; docs/integrators.md section 6)", f"'abm' with the {formulation} formulation",
+            "sigma form; docs/integrators.md section 8)", f"'abm' with the {formulation} formulation",
         )
     return Prepared(
         model=model,

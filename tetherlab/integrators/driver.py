@@ -224,7 +224,7 @@ def warm_up(method, rhs, n, p):
 
 def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_steps=10**7,
               chunk_seconds=0.5, progress=None, fixed_step=False, second_order=False,
-              event=None, n_events=0, terminal=()):  # fmt: skip
+              event=None, n_events=0, terminal=(), newton="auto"):  # fmt: skip
     """Integrate y' = rhs(t, y; p) from t0 and return the solution at the times ``t_out``.
 
     ``method``: one of :data:`METHODS`.  ``rhs``: a cfunc with :data:`tetherlab._jit.RHS_SIG`.
@@ -240,6 +240,11 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     is located on the dense output, the integration is taken exactly to it (no step straddles
     it: the place for kinks such as a tether going slack) and restarted there; components whose
     ``terminal[k]`` is true stop the run there, with the stop state as the last output row.
+    ``newton`` (RADAU5): "structured" uses the O(n) Newton matrix of a tether state
+    (tetherlab/tether/newton.py: analytic rod blocks, block-Thomas solve), "dense" the
+    finite-difference Jacobian and dense LU, "auto" the structured one whenever the state is one it
+    understands (Cowell, second order, no other components); ``stats["newton_matrix"]`` says which
+    was used and, for "dense" under "auto", why.
     Never raises for a failure of the integration itself: that is
     reported in the result's ``status``/``message``, with every output computed before it.
     """
@@ -264,7 +269,12 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     if second_order and n % 2:
         raise ValueError(f"second_order: expected an even state length (y = [q, v]); got {n}")
     m1 = n // 2 if second_order else 0
-    ws = radau5_workspace(n, m1) if method == "radau5" else ()
+    newton_kind, p_struct = _newton_choice(method, newton, p, n, second_order)
+
+    def new_ws():
+        return radau5_workspace(n, m1, p_struct) if method == "radau5" else ()
+
+    ws = new_ws()
     ev = _NO_EV.copy()
     events = []
     stopped_by = None
@@ -297,7 +307,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
             if k_in == 0 or sub_t[-1] < t_ev:
                 sub_t = np.concatenate([sub_t, [t_ev]])
             sub_out = np.empty((sub_t.size, n))
-            ws_sub = radau5_workspace(n, m1) if method == "radau5" else ()
+            ws_sub = new_ws()
             status, t, h_sub, nd = _call_kernel(method, rhs, t, y, sub_t, p, rtol, atol_v, h,
                                                 h_max, max(budget, 1), sub_out, stats,
                                                 fixed_step, ws_sub, False)  # fmt: skip
@@ -308,7 +318,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
                 break
             events.append((t, comp, new_side))
             resume = False  # RADAU5's workspace holds the uncommitted step: start afresh
-            ws = radau5_workspace(n, m1) if method == "radau5" else ()
+            ws = new_ws()
             if h_sub > 0.0:
                 h = h_sub
             if terminal[comp]:
@@ -343,6 +353,8 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         "wall_s": wall_s,
         "compile_s": compile_s,
     }
+    if method == "radau5":
+        stats_d["newton_matrix"] = newton_kind
     msg = status_message(status, t, h, stats_d["rhs_status"], stats_d["n_newton_fail"], max_steps)
     # Only rows that were computed are returned; a failed run's unused rows are dropped (copied
     # out so the unused tail of a large buffer is freed).
@@ -358,6 +370,24 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         t=t_res, y=y_res, status=status, message=msg, t_end=t, y_end=y.copy(),
         stats=stats_d, events=tuple(events), stopped_by=stopped_by,
     )  # fmt: skip
+
+
+def _newton_choice(method, newton, p, n, second_order):
+    """(description for the stats, p for a structured workspace or None)."""
+    if newton not in ("auto", "dense", "structured"):
+        raise ValueError(f"newton: expected 'auto', 'dense' or 'structured'; got {newton!r}")
+    if method != "radau5":
+        return "", None
+    if newton == "dense":
+        return "dense (requested)", None
+    from ..tether.newton import structure_supported
+
+    why = structure_supported(p, n, second_order)
+    if not why:
+        return "structured", p
+    if newton == "structured":
+        raise ValueError(f"newton: 'structured' is not available for this state: {why}")
+    return f"dense ({why})", None
 
 
 def _check_events(method, event, n_events, terminal):

@@ -59,6 +59,7 @@ from .common import (
     hinit,
     scaled_sq,
 )
+from ..tether import newton as _nw
 from .tableau import (
     ALPH,
     BETA,
@@ -92,6 +93,20 @@ QUOT2 = 1.2
 FACL = 5.0  # hnew/h >= 1/FACL
 FACR = 0.125  # hnew/h <= 1/FACR
 MAX_SINGULAR = 5  # consecutive singular matrices before giving up
+#: Target contraction rate of the simplified Newton iteration for the step-size cap (docs/
+#: integrators.md, section 7): the rate grows like h^2 on a rotating stiff tether, so after an
+#: accepted step with a fresh Jacobian and a measured rate theta the next step is at most
+#: h sqrt(THETA_STEP / theta).  Without the cap Hairer's error-based controller proposes steps the
+#: iteration cannot converge on, and nearly every accepted step followed a Newton failure.
+THETA_STEP = 0.3
+#: Structured Jacobian (O(n), cheaper than one rhs call): 0 Hairer's reuse rule, 1 refreshed on
+#: every step at its start, 2 refreshed on every step at the middle of the coming step (on the
+#: extrapolated collocation polynomial), which halves the rotation of the stiff axial direction
+#: between the Jacobian and the stages (docs/integrators.md, section 7; measured best).
+STRUCT_JAC_EVERY_STEP = 2
+#: Newton iterations allowed with the structured matrix (an iteration costs 3 rhs calls and two
+#: O(n) solves; docs/integrators.md section 7: 7, 10, 14 measured, 10 kept).
+NIT_STRUCT = 10
 
 # Workspace scalar slots (float fs[], int is_[]).
 _F_HOLD = 0
@@ -100,6 +115,9 @@ _F_FACCON = 2
 _F_HACC = 3
 _F_ERRACC = 4
 _F_HLU = 5
+_F_THSTEP = 6  # Newton-rate step cap target (0: off, Hairer's controller alone); set by the workspace
+_F_JACEVERY = 7  # > 0: a fresh Jacobian on every step (set by the workspace; structured default)
+_F_NIT = 8  # max Newton iterations (0: NIT); set by the workspace
 _I_FIRST = 0
 _I_NEED_JAC = 1
 _I_LU_VALID = 2
@@ -107,10 +125,16 @@ _I_NACCPT = 3
 _I_NSING = 4
 _I_STARTED = 5
 _I_M1 = 6  # second-order structure: y'_i = y_{i+M1} for i < M1 (0 = none), set by the workspace
+_I_STRUCT = 7  # 1: structured Newton matrix of a tether state (tether/newton.py), O(n) per step
 
 
-def radau5_workspace(n, m1=0):
+def radau5_workspace(n, m1=0, p=None):
     """Arrays that carry RADAU5's state between calls of :func:`radau5_core`.
+
+    With ``p`` (a tether model's parameter block, Cowell layout, ``m1 = n/2``) the Newton matrix
+    is the structured one of :mod:`tetherlab.tether.newton` (analytic rod blocks, block-Thomas
+    factorisation and solve, O(n) per step) and no dense n x n array is allocated; the caller
+    checks :func:`tetherlab.tether.newton.structure_supported` first.
 
     ``m1 > 0`` declares Hairer's special structure (RADAU5's M1 = M2): n = 2 m1 and the first m1
     components have the next m1 as their exact derivatives (y = [q, v], q' = v, as in Cowell's
@@ -119,19 +143,33 @@ def radau5_workspace(n, m1=0):
     """
     if m1 < 0 or (m1 > 0 and n != 2 * m1):
         raise ValueError(f"m1: expected 0 or n/2 = {n / 2:g} (second-order structure); got {m1}")
-    ne = n - m1
+    structured = p is not None
+    if structured and (m1 == 0 or _nw.structure_supported(p, n, True)):
+        raise ValueError("p: the structured Newton matrix needs a Cowell tether state with m1 = n/2")
+    ne = 1 if structured else n - m1
+    nd = 1 if structured else n
+    blk, sf1, sf2 = _nw.workspace(p) if structured else (
+        np.zeros((1, _nw.BLK_SIZE)), np.zeros((1, _nw.FAC_SIZE)),
+        np.zeros((1, _nw.FAC_SIZE), dtype=np.complex128))  # fmt: skip
     ws = (
-        np.zeros((n, n)),  # fjac
+        np.zeros((nd, nd)),  # fjac
         np.zeros((ne, ne)),  # e1 (LU of U1/h - J, or of its reduced form)
         np.zeros((ne, ne), dtype=np.complex128),  # e2 (LU of (ALPH+iBETA)/h - J, or reduced)
         np.zeros(ne, dtype=np.int64),  # ip1
         np.zeros(ne, dtype=np.int64),  # ip2
         np.zeros((4, n)),  # cont: y_new and the 3 coefficients of the collocation polynomial
         np.zeros(n),  # f0 = f(t, y)
-        np.zeros(8),  # float scalars
+        np.zeros(12),  # float scalars
         np.zeros(8, dtype=np.int64),  # int scalars
+        blk,  # structured: rod blocks (tether/newton.py)
+        sf1,  # structured: real factors
+        sf2,  # structured: complex factors
     )
     ws[8][_I_M1] = m1
+    ws[8][_I_STRUCT] = 1 if structured else 0
+    ws[7][_F_THSTEP] = THETA_STEP
+    ws[7][_F_NIT] = NIT_STRUCT if structured else NIT
+    ws[7][_F_JACEVERY] = float(STRUCT_JAC_EVERY_STEP) if structured else 0.0
     return ws
 
 
@@ -296,6 +334,15 @@ def _solve(e, ip, fjac, g, m1, b):
 
 
 @njit(cache=True)
+def _lin(struct, e, ip, fjac, g, m1, b, p, blk, sfac):
+    """(g I - J) x = b in place: the structured solve, or the dense factors' one."""
+    if struct:
+        _nw.solve(p, blk, g, sfac, m1, b)
+    else:
+        _solve(e, ip, fjac, g, m1, b)
+
+
+@njit(cache=True)
 def radau5_core(
     rhs,
     t,
@@ -319,6 +366,9 @@ def radau5_core(
     f0,
     fs,
     is_,
+    blk,
+    sfac1,
+    sfac2,
     resume,
     event,
     ne,
@@ -341,12 +391,17 @@ def radau5_core(
         return OK, t, h, n_done
     t_end = t_out[m - 1]
     m1 = is_[_I_M1]
+    struct = is_[_I_STRUCT] != 0
+    thstep = fs[_F_THSTEP]
+    nit = int(fs[_F_NIT]) if fs[_F_NIT] > 0.0 else NIT
+    jac_every = fs[_F_JACEVERY] > 0.0
+    jac_mid = fs[_F_JACEVERY] > 1.0
 
     # Hairer's tolerance map (RADAU5 driver, EXPM = 2/3), and Newton's stopping tolerance FNEWT.
     rtol_i = 0.1 * rtol ** (2.0 / 3.0)
     atol_i = atol * (rtol_i / rtol)
     fnewt = max(10.0 * EPS / rtol_i, min(0.03, np.sqrt(rtol_i)))
-    cfac = SAFE * (1 + 2 * NIT)
+    cfac = SAFE * (1 + 2 * nit)
     hmax = h_max if h_max > 0.0 else np.inf
 
     z1 = np.empty(n)
@@ -425,7 +480,21 @@ def radau5_core(
 
         # ------------------------------------------------ Jacobian and LU (Hairer's 10 / 20)
         if need_jac:
-            st = _jacobian(rhs, t, y, f0, p, fjac, tmp, stats)
+            if struct:
+                if jac_mid and not first:
+                    # at the middle of the coming step, on the extrapolated collocation polynomial
+                    cq = 0.5 * h / hold
+                    for i in range(n):
+                        tmp[i] = y[i] + cq * (cont[1, i] + (cq - C2M1) * (
+                            cont[2, i] + (cq - C1M1) * cont[3, i]))  # fmt: skip
+                    st = _nw.rod_blocks(tmp, p, m1, blk)
+                else:
+                    st = _nw.rod_blocks(y, p, m1, blk)
+                stats[ST_NJAC] += 1
+                if st != 0:
+                    st = -1
+            else:
+                st = _jacobian(rhs, t, y, f0, p, fjac, tmp, stats)
             if st != 0:
                 if st == -1:
                     status = NON_FINITE
@@ -437,7 +506,13 @@ def radau5_core(
             caljac = True
             lu_valid = False
         if not lu_valid or h != h_lu:
-            ier = _decompose(fjac, h, e1, e2, ip1, ip2, stats, m1)
+            if struct:
+                stats[ST_NLU] += 1
+                ier = _nw.factor(p, blk, U1 / h, sfac1)
+                if ier == 0:
+                    ier = _nw.factor(p, blk, complex(ALPH / h, BETA / h), sfac2)
+            else:
+                ier = _decompose(fjac, h, e1, e2, ip1, ip2, stats, m1)
             if ier != 0:
                 lu_valid = False
                 nsing += 1
@@ -499,7 +574,7 @@ def radau5_core(
         fail = 0  # 0 ok, RHS_FAILED / NON_FINITE, 10 = Newton failure, 11 = Newton too slow
         hhfac = 1.0
         while True:
-            if newt >= NIT:
+            if newt >= nit:
                 fail = 10
                 break
             # Stage values y + z_k -> f, written back into z_k.
@@ -533,10 +608,10 @@ def radau5_core(
                 z1[i] = -f1[i] * fac1 + TI11 * a1 + TI12 * a2 + TI13 * a3
                 z2[i] = s2 * alphn - s3 * betan + TI21 * a1 + TI22 * a2 + TI23 * a3
                 z3[i] = s3 * alphn + s2 * betan + TI31 * a1 + TI32 * a2 + TI33 * a3
-            _solve(e1, ip1, fjac, fac1, m1, z1)
+            _lin(struct, e1, ip1, fjac, fac1, m1, z1, p, blk, sfac1)
             for i in range(n):
                 w[i] = complex(z2[i], z3[i])
-            _solve(e2, ip2, fjac, fac2, m1, w)
+            _lin(struct, e2, ip2, fjac, fac2, m1, w, p, blk, sfac2)
             for i in range(n):
                 z2[i] = w[i].real
                 z3[i] = w[i].imag
@@ -549,8 +624,8 @@ def radau5_core(
             if not np.isfinite(dyno):
                 fail = NON_FINITE
                 break
-            # Convergence rate; bad convergence or a predicted miss of NIT.
-            if newt > 1 and newt < NIT:
+            # Convergence rate; bad convergence or a predicted miss of nit.
+            if newt > 1 and newt < nit:
                 thq = dyno / dynold
                 if newt == 2:
                     theta = thq
@@ -559,10 +634,10 @@ def radau5_core(
                 thqold = thq
                 if theta < 0.99:
                     faccon = theta / (1.0 - theta)
-                    dyth = faccon * dyno * theta ** (NIT - 1 - newt) / fnewt
+                    dyth = faccon * dyno * theta ** (nit - 1 - newt) / fnewt
                     if dyth >= 1.0 and not fixed_step:
                         qnewt = max(1e-4, min(20.0, dyth))
-                        hhfac = 0.8 * qnewt ** (-1.0 / (4.0 + NIT - 1 - newt))
+                        hhfac = 0.8 * qnewt ** (-1.0 / (4.0 + nit - 1 - newt))
                         fail = 11
                         break
                 else:
@@ -618,7 +693,7 @@ def radau5_core(
                 # Weights for the error test use max(|y|, |y_new|), as the DOP853 kernel and
                 # scipy do; f3 is free here and holds them.
                 f3[i] = atol_i[i] + rtol_i * max(abs(y[i]), abs(y[i] + z3[i]))
-            _solve(e1, ip1, fjac, fac1, m1, tmp)
+            _lin(struct, e1, ip1, fjac, fac1, m1, tmp, p, blk, sfac1)
             for i in range(n):
                 err += scaled_sq(tmp[i], f3[i])
             err = max(np.sqrt(err / n), 1e-10)
@@ -632,7 +707,7 @@ def radau5_core(
                 if st == 0 and all_finite(f1):
                     for i in range(n):
                         tmp[i] = f1[i] + f2[i]
-                    _solve(e1, ip1, fjac, fac1, m1, tmp)
+                    _lin(struct, e1, ip1, fjac, fac1, m1, tmp, p, blk, sfac1)
                     err = 0.0
                     for i in range(n):
                         err += scaled_sq(tmp[i], f3[i])
@@ -651,7 +726,7 @@ def radau5_core(
                 h = 0.25 * h
                 need_jac = not caljac
                 continue
-            fac = min(SAFE, cfac / (newt + 2 * NIT))
+            fac = min(SAFE, cfac / (newt + 2 * nit))
             quot = max(FACR, min(FACL, err**0.25 / fac))
         hnew = h / quot
 
@@ -736,6 +811,7 @@ def radau5_core(
                     gold[k] = gnew[k]
 
             # ---------------------------------------------- accept
+            fresh_jac = caljac
             first = False
             naccpt += 1
             if not fixed_step:
@@ -747,6 +823,9 @@ def radau5_core(
                     hnew = h / quot
                 hacc = h
                 erracc = max(1e-2, err)
+                if newt >= 2 and fresh_jac and thstep > 0.0:
+                    # Newton-rate cap (THETA_STEP): a fresh Jacobian's rate grows like h^2 here
+                    hnew = min(hnew, h * np.sqrt(thstep / theta))
             hold = h
             t = xph
             for i in range(n):
@@ -780,7 +859,7 @@ def radau5_core(
             if reject:
                 hnew = min(hnew, h)
             reject = False
-            need_jac = theta > THET
+            need_jac = theta > THET or jac_every
             if last:
                 h = min(max(hopt, h_unclipped), hmax)
                 status = OK
@@ -838,10 +917,15 @@ def radau5_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stat
     ip2 = np.zeros(n, dtype=np.int64)
     cont = np.zeros((4, n))
     f0 = np.zeros(n)
-    fs = np.zeros(8)
+    fs = np.zeros(12)
+    fs[_F_THSTEP] = THETA_STEP
+    fs[_F_NIT] = NIT
     is_ = np.zeros(8, dtype=np.int64)
     ev = np.array([0.0, -1.0, -1.0, 0.0])
+    blk = np.zeros((1, _nw.BLK_SIZE))
+    sf1 = np.zeros((1, _nw.FAC_SIZE))
+    sf2 = np.zeros((1, _nw.FAC_SIZE), dtype=np.complex128)
     return radau5_core(
         rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats, fixed_step,
-        fjac, e1, e2, ip1, ip2, cont, f0, fs, is_, False, rhs, 0, ev,
+        fjac, e1, e2, ip1, ip2, cont, f0, fs, is_, blk, sf1, sf2, False, rhs, 0, ev,
     )  # fmt: skip

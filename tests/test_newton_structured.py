@@ -1,0 +1,149 @@
+"""The structured Newton matrix of RADAU5 (tetherlab/tether/newton.py, docs/integrators.md 6-7).
+
+* The block-Thomas solve agrees to round-off with a dense LU solve of the same Newton matrix
+  E = g I - [[0, I], [A_q, A_v]], A = T^-1 M_x^-1 (K_x or C_x) T, assembled here in numpy from
+  the rod blocks (hub of two tethers, one with a tip body and one with a free end; free and fixed
+  root; real and complex g).
+* The rod blocks are the derivation's: for the energy model without distributed forces M_x is
+  constant and the equations are exactly M_x x'' = F_el(x, x'), so A_q and A_v equal the
+  central-difference Jacobian of the compiled rhs (to the difference error, ~1e-6 relative).
+* Whole runs with the structured and the dense Newton matrix agree within the tolerance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tetherlab.forces import EFFECTS
+from tetherlab.formulations.cowell import cowell_rhs, cowell_rhs_py
+from tetherlab.integrators.driver import integrate
+from tetherlab.system import TetherSpec, build_model, chain_state
+from tetherlab.tether import newton as nw
+
+SQ3 = np.sqrt(3.0)
+
+
+def _model(kind, gravity, root_fixed, seed=1):
+    rng = np.random.default_rng(seed)
+    tets = [TetherSpec(f"t{k}", 3 + k, 1000.0, 5e4, 10.0, 300.0, kind, 50.0 if k == 0 else 0.0,
+                       "mf") for k in range(2)]  # fmt: skip
+    effects = [(EFFECTS["central_gravity"], {})] if gravity else []
+    model = build_model(root_mass_kg=500.0, tethers=tets, effects=effects,
+                        central={"mu_m3_s2": 3.986004418e14}, root_fixed=root_fixed)  # fmt: skip
+    dirs = []
+    for k, tet in enumerate(tets):
+        v = rng.normal(size=(tet.rods, 3)) * 0.2 + np.array([1.0, 0.3 * k, 0.1])
+        dirs.append(v / np.linalg.norm(v, axis=1)[:, None])
+    y = chain_state(model, np.array([7e6, 0, 0.0]), np.array([0, 7500.0, 0]), dirs, [1e-3, 1e-3],
+                    np.array([0, 0, 1e-3]))  # fmt: skip
+    y[y.size // 2 :] += rng.normal(size=y.size // 2) * 0.01  # velocities off the rigid motion
+    return model, y
+
+
+def _dense_A(model, blk, m1):
+    """A_q, A_v of the structured matrix, assembled densely (independent of newton.solve)."""
+    T = np.zeros((m1, m1))
+    T[:3, :3] = np.eye(3)
+    M = np.zeros((m1, m1))
+    K = np.zeros((m1, m1))
+    C = np.zeros((m1, m1))
+    M[:3, :3] = np.eye(3) * (1.0 if model.root_fixed else model.root_mass_kg)
+    g = 0
+    for tet in model.tethers:
+        for i in range(tet.rods):
+            oa, ob = (0 if i == 0 else 3 * g), 3 + 3 * g
+            T[ob : ob + 3] = T[oa : oa + 3]
+            T[ob : ob + 3, ob : ob + 3] += 2 * SQ3 * np.eye(3)
+            b = blk[g]
+            maa, mab, kel, kv = (b[9 * j : 9 * j + 9].reshape(3, 3) for j in range(4))
+            for o, sg, diag, off in ((oa, 1.0, (oa, maa), (ob, mab)), (ob, -1.0, (ob, maa), (oa, mab))):
+                if o == 0 and model.root_fixed:
+                    continue
+                M[o : o + 3, diag[0] : diag[0] + 3] += diag[1]
+                M[o : o + 3, off[0] : off[0] + 3] += off[1]
+                # F_A = f u, F_B = -f u: dF_A/dx_A = -KEL, dF_A/dx_B = +KEL (docs section 6)
+                K[o : o + 3, oa : oa + 3] -= sg * kel
+                K[o : o + 3, ob : ob + 3] += sg * kel
+                C[o : o + 3, oa : oa + 3] -= sg * kv
+                C[o : o + 3, ob : ob + 3] += sg * kv
+            if i == tet.rods - 1 and tet.tip_mass_kg > 0:
+                M[ob : ob + 3, ob : ob + 3] += tet.tip_mass_kg * np.eye(3)
+            g += 1
+    Ti = np.linalg.inv(T)
+    return Ti @ np.linalg.solve(M, K) @ T, Ti @ np.linalg.solve(M, C) @ T
+
+
+@pytest.mark.parametrize("root_fixed", [False, True])
+@pytest.mark.parametrize("kind", ["paper", "energy"])
+def test_structured_solve_equals_dense_lu(kind, root_fixed):
+    model, y = _model(kind, True, root_fixed)
+    p = model.fresh_params()
+    m1 = y.size // 2
+    blk, f1, f2 = nw.workspace(p)
+    assert nw.rod_blocks(y, p, m1, blk) == 0
+    aq, av = _dense_A(model, blk, m1)
+    rng = np.random.default_rng(7)
+    # the two RADAU5 shifts at h = 0.5 s (U1/h and (ALPH + i BETA)/h)
+    for g, fac in ((3.6378342527444962 / 0.5, f1), (complex(2.6810828736277523, 3.0504301992474105) / 0.5, f2)):
+        assert nw.factor(p, blk, g, fac) == 0
+        E = g * np.eye(2 * m1) - np.block([[np.zeros((m1, m1)), np.eye(m1)], [aq, av]])
+        b = rng.normal(size=2 * m1) * (1.0 if fac is f1 else 1.0 + 0.5j)
+        x = b.astype(fac.dtype)
+        nw.solve(p, blk, g, fac, m1, x)
+        xd = np.linalg.solve(E, b)
+        # round-off: cond(E) ~ 1e3 here, so 1e-12 relative leaves a factor ~10 of margin
+        assert np.max(np.abs(x - xd)) <= 1e-12 * np.max(np.abs(xd))
+
+
+@pytest.mark.parametrize("root_fixed", [False, True])
+def test_rod_blocks_are_the_jacobian_for_the_energy_model(root_fixed):
+    model, y = _model("energy", False, root_fixed)
+    p = model.fresh_params()
+    m1 = y.size // 2
+    blk, _, _ = nw.workspace(p)
+    nw.rod_blocks(y, p, m1, blk)
+    aq, av = _dense_A(model, blk, m1)
+    J = np.empty((2 * m1, 2 * m1))
+    for j in range(2 * m1):
+        d = 1e-7 * max(1.0, abs(y[j])) if j < m1 else 1e-6
+        yp, ym = y.copy(), y.copy()
+        yp[j] += d
+        ym[j] -= d
+        J[:, j] = (cowell_rhs_py(model, yp) - cowell_rhs_py(model, ym)) / (2 * d)
+    # central differences: truncation ~ d^2 f''' and rounding ~ eps |f| / d, both << 1e-5
+    assert np.max(np.abs(J[m1:, :m1] - aq)) <= 1e-5 * np.max(np.abs(aq))
+    assert np.max(np.abs(J[m1:, m1:] - av)) <= 1e-5 * np.max(np.abs(av))
+
+
+def test_structured_and_dense_runs_agree():
+    model, y0 = _model("paper", True, False)
+    p = model.fresh_params()
+    t_out = np.linspace(0.0, 200.0, 21)
+    rtol = 1e-8
+    out = {}
+    for kind in ("structured", "dense"):
+        res = integrate("radau5", cowell_rhs, 0.0, y0, t_out, model.fresh_params(), rtol, rtol,
+                        second_order=True, newton=kind)  # fmt: skip
+        assert res.success, res.message
+        out[kind] = res
+    assert out["structured"].stats["newton_matrix"] == "structured"
+    assert out["dense"].stats["newton_matrix"] == "dense (requested)"
+    m1 = y0.size // 2
+    # joint positions of both runs within 100 tolerance units of the 1000 m rods (RADAU5's
+    # tolerance map loosens rtol to 0.1 rtol^(2/3); two runs of the same error estimate differ by
+    # about their error)
+    qa, qb = out["structured"].y[:, 3:m1], out["dense"].y[:, 3:m1]
+    assert np.max(np.abs(qa - qb)) * 2 * SQ3 <= 100 * rtol * 1000.0
+
+
+def test_fallback_names_the_reason():
+    # a first-order state (not declared second order) keeps the dense path and says why
+    model, y0 = _model("paper", False, False)
+    res = integrate("radau5", cowell_rhs, 0.0, y0, np.array([0.0, 1.0]), model.fresh_params(),
+                    1e-6, 1e-6, second_order=False)  # fmt: skip
+    assert res.success
+    assert res.stats["newton_matrix"].startswith("dense (the state is not declared second order")
+    with pytest.raises(ValueError, match="newton"):
+        integrate("radau5", cowell_rhs, 0.0, y0, np.array([0.0, 1.0]), model.fresh_params(),
+                  1e-6, 1e-6, second_order=False, newton="structured")  # fmt: skip

@@ -1,0 +1,383 @@
+"""Structured Newton matrix of a Cowell tether state: O(n) factorisation and solve (compiled).
+
+RADAU5's Newton systems with the second-order structure (M1) are (g I - A_v - A_q/g) z = b, with
+A_q = da/dq and A_v = da/dq' the Jacobians of the accelerations of the generalised coordinates
+q = (r0, d_1 ... d_N) (eq. 23).  In q every joint depends on all earlier d_j, so these Jacobians
+are dense.  In joint coordinates x = (r0, r_B,1, ..., r_B,N) (x = T q, T block lower triangular of
+"sums", T^-1 block bidiagonal of differences) the equations of motion are M_x(u) x'' = F(x, x') with
+M_x block tridiagonal (each rod couples its two joints) and the elastic/damping forces of a rod
+acting on its two joints only.  The Newton matrix used here is
+
+    E = T^-1 M_x^-1 N T,   N = g M_x - C_x - K_x / g,
+
+with K_x = dF_el/dx, C_x = dF_el/dx' the analytic Jacobians of the axial elastic and damping force
+(3x3 per rod) and M_x frozen at the state where the matrix is formed: the distributed external
+forces and the derivative of M_x(u) are left out (they are not stiff).  docs/integrators.md,
+section 6, derives M_x and the blocks; solving E z = r costs two O(n) transforms and one block
+tridiagonal solve of N (block Thomas from each tip to its root, the tethers' Schur complements
+accumulated at the root body, as the reaction solve of chain.py does).
+
+Only the state layout of Cowell's formulation (y = [q, q'], q = (r0, d_1..d_N)) is understood:
+:func:`structure_supported` says why not otherwise, and the caller then keeps the dense path.
+
+Storage (float64, per rod g, BLK_SIZE): MAA (9), MAB (9), KEL (9), KV (9).
+Factors (dtype of g, real or complex; per rod g the joint B_g, FAC_SIZE): S^-1 (9), Q (9); row
+``nrods`` holds the root's S^-1.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import njit
+from ..kernel.layout import (
+    FORM_COWELL,
+    H_FORM,
+    H_LEN,
+    H_NRODS,
+    H_NSTATE,
+    H_NTETH,
+    H_OFF_ROD,
+    H_OFF_TETH,
+    H_ROOT_INV_M,
+    H_ROOT_M,
+    H_SIZE,
+    MODEL_ENERGY,
+    MODEL_PRINTED,
+    RT_D,
+    RT_EA,
+    RT_LU,
+    RT_M,
+    RT_SIZE,
+    TT_MODEL,
+    TT_NRODS,
+    TT_ROD0,
+    TT_SIZE,
+    TT_TENSION_ONLY,
+    TT_TIP_M,
+)
+
+SQ3 = math.sqrt(3.0)
+B_MAA, B_MAB, B_KEL, B_KV = 0, 9, 18, 27
+BLK_SIZE = 36
+F_SINV, F_Q = 0, 9
+FAC_SIZE = 18
+
+
+def structure_supported(p, n_state, second_order):
+    """'' if the structured Newton matrix applies to this model and state, else the reason."""
+    if not second_order:
+        return "the state is not declared second order (y = [q, q'])"
+    if p.size < H_SIZE or int(p[H_LEN]) != p.size:
+        return "p is not a tether model's parameter block"
+    if int(p[H_FORM]) != FORM_COWELL:
+        return f"formulation code {int(p[H_FORM])} is not Cowell's"
+    nrods = int(p[H_NRODS])
+    expect = 2 * (3 + 3 * nrods)
+    if int(p[H_NSTATE]) != n_state or n_state != expect:
+        return (f"state of {n_state} components is not the Cowell tether layout "
+                f"2*(3 + 3*{nrods}) = {expect} (components the structured solver does not know)")
+    if nrods < 1:
+        return "no rods"
+    return ""
+
+
+def workspace(p):
+    """Arrays for the structured path: rod blocks, real and complex factors."""
+    nrods = int(p[H_NRODS])
+    return (
+        np.zeros((nrods, BLK_SIZE)),
+        np.zeros((nrods + 1, FAC_SIZE)),
+        np.zeros((nrods + 1, FAC_SIZE), dtype=np.complex128),
+    )
+
+
+@njit(cache=True)
+def _inv3(a, out):
+    """out = a^-1 for a flat row-major 3x3 (real or complex); returns the determinant."""
+    c00 = a[4] * a[8] - a[5] * a[7]
+    c01 = a[5] * a[6] - a[3] * a[8]
+    c02 = a[3] * a[7] - a[4] * a[6]
+    det = a[0] * c00 + a[1] * c01 + a[2] * c02
+    if det == 0.0:
+        return det
+    inv = 1.0 / det
+    out[0] = c00 * inv
+    out[1] = (a[2] * a[7] - a[1] * a[8]) * inv
+    out[2] = (a[1] * a[5] - a[2] * a[4]) * inv
+    out[3] = c01 * inv
+    out[4] = (a[0] * a[8] - a[2] * a[6]) * inv
+    out[5] = (a[2] * a[3] - a[0] * a[5]) * inv
+    out[6] = c02 * inv
+    out[7] = (a[1] * a[6] - a[0] * a[7]) * inv
+    out[8] = (a[0] * a[4] - a[1] * a[3]) * inv
+    return det
+
+
+@njit(cache=True)
+def rod_blocks(y, p, m1, blk):
+    """Mass and stiffness blocks of every rod at the state y = [q, q'] (the "Jacobian").
+
+    Returns 0, or 1 if a rod has zero length (the caller falls back as for a failed Jacobian).
+    """
+    nteth = int(p[H_NTETH])
+    offt = int(p[H_OFF_TETH])
+    offr = int(p[H_OFF_ROD])
+    for k in range(nteth):
+        tb = offt + k * TT_SIZE
+        n = int(p[tb + TT_NRODS])
+        g0 = int(p[tb + TT_ROD0])
+        tension_only = p[tb + TT_TENSION_ONLY] != 0.0
+        model = int(p[tb + TT_MODEL])
+        if model == MODEL_ENERGY:
+            c1 = SQ3
+            c2 = 0.0
+        elif model == MODEL_PRINTED:
+            c1 = 2.0 - SQ3
+            c2 = SQ3 - 1.0
+        else:
+            c1 = SQ3
+            c2 = 1.0 - SQ3
+        # C^-1 = I/c1 - c2/(c1 (c1 + c2)) u u^T;  Kc = C^-1 / (2 sqrt3)
+        kc_i = 1.0 / (2.0 * SQ3 * c1)
+        kc_u = -c2 / (2.0 * SQ3 * c1 * (c1 + c2))
+        for i in range(n):
+            g = g0 + i
+            rb = offr + g * RT_SIZE
+            m = p[rb + RT_M]
+            lu = p[rb + RT_LU]
+            ea = p[rb + RT_EA]
+            damp = p[rb + RT_D]
+            d = (y[3 + 3 * g], y[4 + 3 * g], y[5 + 3 * g])
+            dd = (y[m1 + 3 + 3 * g], y[m1 + 4 + 3 * g], y[m1 + 5 + 3 * g])
+            dn = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+            if not dn > 0.0:
+                return 1
+            u = (d[0] / dn, d[1] / dn, d[2] / dn)
+            ell = 2.0 * SQ3 * dn
+            eps = ell / lu - 1.0
+            vrel = (2.0 * SQ3 * dd[0], 2.0 * SQ3 * dd[1], 2.0 * SQ3 * dd[2])
+            uv = u[0] * vrel[0] + u[1] * vrel[1] + u[2] * vrel[2]
+            epsd = uv / lu
+            fe = ea * eps + damp * epsd
+            slack = tension_only and (eps <= 0.0 or fe < 0.0)
+            # w = (I - u u^T) v_rel / l : d(u . v_rel)/dx_B
+            w = ((vrel[0] - uv * u[0]) / ell, (vrel[1] - uv * u[1]) / ell,
+                 (vrel[2] - uv * u[2]) / ell)  # fmt: skip
+            b = blk[g]
+            for a in range(3):
+                for c in range(3):
+                    uu = u[a] * u[c]
+                    de = 1.0 if a == c else 0.0
+                    kc = kc_i * de + kc_u * uu
+                    b[B_MAA + 3 * a + c] = m * (0.25 * de + 0.5 * kc)
+                    b[B_MAB + 3 * a + c] = m * (0.25 * de - 0.5 * kc)
+                    if slack:
+                        b[B_KEL + 3 * a + c] = 0.0
+                        b[B_KV + 3 * a + c] = 0.0
+                    else:
+                        # d(fe u)/d(x_B - x_A) and d(fe u)/d(v_B - v_A)
+                        b[B_KEL + 3 * a + c] = (ea / lu) * uu + (fe / ell) * (de - uu) + (
+                            damp / lu) * u[a] * w[c]  # fmt: skip
+                        b[B_KV + 3 * a + c] = (damp / lu) * uu
+    return 0
+
+
+@njit(cache=True)
+def factor(p, blk, g, fac):
+    """Block-Thomas factorisation of N = g M_x - C_x - K_x/g (g real or complex) into ``fac``.
+
+    Per tether, from the tip joint to the first: S_n = P_n + g mf I, S_j = P_j + P_{j+1} -
+    Q_{j+1} S_{j+1}^-1 Q_{j+1}, with the rod blocks P = g MAA + KV + KEL/g, Q = g MAB - KV - KEL/g;
+    the root gets S_0 = g m0 I + sum over tethers (P_1 - Q_1 S_1^-1 Q_1).  Returns 0 or 1 for a
+    singular block.
+    """
+    nteth = int(p[H_NTETH])
+    offt = int(p[H_OFF_TETH])
+    nrods = int(p[H_NRODS])
+    free_root = p[H_ROOT_INV_M] > 0.0
+    m0 = p[H_ROOT_M]
+    ginv = 1.0 / g
+    s = np.zeros(9, dtype=fac.dtype)
+    tmp = np.zeros(9, dtype=fac.dtype)
+    root = np.zeros(9, dtype=fac.dtype)
+    for a in range(3):
+        root[4 * a] = g * m0 if free_root else g
+    for k in range(nteth):
+        tb = offt + k * TT_SIZE
+        n = int(p[tb + TT_NRODS])
+        g0 = int(p[tb + TT_ROD0])
+        mf = p[tb + TT_TIP_M]
+        for i in range(n - 1, -1, -1):
+            gr = g0 + i
+            b = blk[gr]
+            f = fac[gr]
+            # Q of rod gr (couples its joints A and B), kept for the solve
+            for c in range(9):
+                f[F_Q + c] = g * b[B_MAB + c] - b[B_KV + c] - b[B_KEL + c] * ginv
+            # S of joint B_gr: P of rod gr, plus P of rod gr+1 minus its Schur term, or the tip
+            for c in range(9):
+                s[c] = g * b[B_MAA + c] + b[B_KV + c] + b[B_KEL + c] * ginv
+            if i == n - 1:
+                if mf > 0.0:
+                    for a in range(3):
+                        s[4 * a] += g * mf
+            else:
+                bn = blk[gr + 1]
+                fn = fac[gr + 1]
+                for c in range(9):
+                    s[c] += g * bn[B_MAA + c] + bn[B_KV + c] + bn[B_KEL + c] * ginv
+                _sub_qsq(s, fn, tmp)
+            det = _inv3(s, tmp)
+            if det == 0.0 or not np.isfinite(abs(det)):
+                return 1
+            for c in range(9):
+                f[F_SINV + c] = tmp[c]
+        if free_root:
+            b = blk[g0]
+            for c in range(9):
+                root[c] += g * b[B_MAA + c] + b[B_KV + c] + b[B_KEL + c] * ginv
+            _sub_qsq(root, fac[g0], tmp)
+    det = _inv3(root, tmp)
+    if det == 0.0 or not np.isfinite(abs(det)):
+        return 1
+    for c in range(9):
+        fac[nrods, F_SINV + c] = tmp[c]
+    return 0
+
+
+@njit(cache=True)
+def _sub_qsq(s, f, tmp):
+    """s -= Q S^-1 Q with Q = f[F_Q:], S^-1 = f[F_SINV:] (flat 3x3)."""
+    for a in range(3):
+        for c in range(3):
+            acc = 0.0 * s[0]
+            for e in range(3):
+                acc += f[F_SINV + 3 * a + e] * f[F_Q + 3 * e + c]
+            tmp[3 * a + c] = acc  # S^-1 Q
+    for a in range(3):
+        for c in range(3):
+            acc = 0.0 * s[0]
+            for e in range(3):
+                acc += f[F_Q + 3 * a + e] * tmp[3 * e + c]
+            s[3 * a + c] -= acc
+
+
+@njit(cache=True)
+def solve(p, blk, g, fac, m1, b):
+    """Solve (g I - J) z = b in place for the second-order structure, J = [[0, I], [A_q, A_v]]
+    replaced by the structured E of the module docstring:
+
+        z_v = T^-1 N^-1 (M_x T b_v + K_x T b_q / g),   z_q = (b_q + z_v) / g.
+    """
+    nteth = int(p[H_NTETH])
+    offt = int(p[H_OFF_TETH])
+    nrods = int(p[H_NRODS])
+    free_root = p[H_ROOT_INV_M] > 0.0
+    m0 = p[H_ROOT_M]
+    ginv = 1.0 / g
+    xv = np.empty(m1, dtype=b.dtype)  # T b_v, then the right-hand side s, then w
+    xq = np.empty(m1, dtype=b.dtype)  # T b_q
+    s = np.zeros(m1, dtype=b.dtype)
+    # joint coordinates: x_root = r0, x_B = x_A + 2 sqrt3 d (per tether)
+    for c in range(3):
+        xv[c] = b[m1 + c]
+        xq[c] = b[c]
+    for k in range(nteth):
+        tb = offt + k * TT_SIZE
+        n = int(p[tb + TT_NRODS])
+        g0 = int(p[tb + TT_ROD0])
+        for i in range(n):
+            gr = g0 + i
+            o = 3 + 3 * gr
+            for c in range(3):
+                av = xv[c] if i == 0 else xv[o - 3 + c]
+                aq = xq[c] if i == 0 else xq[o - 3 + c]
+                xv[o + c] = av + 2.0 * SQ3 * b[m1 + o + c]
+                xq[o + c] = aq + 2.0 * SQ3 * b[o + c]
+    # s = M_x xv + K_x xq / g, assembled rod by rod (root row: m0 xv, or xv itself when fixed)
+    for c in range(3):
+        s[c] = m0 * xv[c] if free_root else xv[c]
+    for k in range(nteth):
+        tb = offt + k * TT_SIZE
+        n = int(p[tb + TT_NRODS])
+        g0 = int(p[tb + TT_ROD0])
+        mf = p[tb + TT_TIP_M]
+        for i in range(n):
+            gr = g0 + i
+            bl = blk[gr]
+            oa = 0 if i == 0 else 3 * gr  # joint A of rod gr
+            ob = 3 + 3 * gr
+            for a in range(3):
+                ma = 0.0 * s[0]
+                mb = 0.0 * s[0]
+                ke = 0.0 * s[0]
+                for c in range(3):
+                    ma += bl[B_MAA + 3 * a + c] * xv[oa + c] + bl[B_MAB + 3 * a + c] * xv[ob + c]
+                    mb += bl[B_MAB + 3 * a + c] * xv[oa + c] + bl[B_MAA + 3 * a + c] * xv[ob + c]
+                    ke += bl[B_KEL + 3 * a + c] * (xq[ob + c] - xq[oa + c])
+                if i > 0 or free_root:
+                    s[oa + a] += ma + ke * ginv
+                s[ob + a] += mb - ke * ginv
+            if i == n - 1 and mf > 0.0:
+                for a in range(3):
+                    s[ob + a] += mf * xv[ob + a]
+    # forward elimination of the right-hand side (tip -> root), then the root
+    y0 = np.zeros(3, dtype=b.dtype)
+    for c in range(3):
+        y0[c] = s[c]
+    for k in range(nteth):
+        tb = offt + k * TT_SIZE
+        n = int(p[tb + TT_NRODS])
+        g0 = int(p[tb + TT_ROD0])
+        for i in range(n - 2, -1, -1):
+            gr = g0 + i
+            _sub_q_sinv_y(s, 3 + 3 * gr, fac[gr + 1], s, 3 + 3 * (gr + 1))
+        if free_root:
+            _sub_q_sinv_y(y0, 0, fac[g0], s, 3 + 3 * g0)
+    fr = fac[nrods]
+    for a in range(3):
+        xv[a] = fr[3 * a] * y0[0] + fr[3 * a + 1] * y0[1] + fr[3 * a + 2] * y0[2]
+    # back substitution: w_j = S_j^-1 (y_j - Q_j w_{j-1})
+    for k in range(nteth):
+        tb = offt + k * TT_SIZE
+        n = int(p[tb + TT_NRODS])
+        g0 = int(p[tb + TT_ROD0])
+        for i in range(n):
+            gr = g0 + i
+            f = fac[gr]
+            oa = 0 if i == 0 else 3 * gr
+            ob = 3 + 3 * gr
+            e = (s[ob] - (f[F_Q] * xv[oa] + f[F_Q + 1] * xv[oa + 1] + f[F_Q + 2] * xv[oa + 2]),
+                 s[ob + 1] - (f[F_Q + 3] * xv[oa] + f[F_Q + 4] * xv[oa + 1] + f[F_Q + 5] * xv[oa + 2]),
+                 s[ob + 2] - (f[F_Q + 6] * xv[oa] + f[F_Q + 7] * xv[oa + 1] + f[F_Q + 8] * xv[oa + 2]))  # fmt: skip
+            for a in range(3):
+                xv[ob + a] = f[3 * a] * e[0] + f[3 * a + 1] * e[1] + f[3 * a + 2] * e[2]
+    # back to q: z_v = T^-1 w, z_q = (b_q + z_v)/g
+    for c in range(3):
+        b[m1 + c] = xv[c]
+    for k in range(nteth):
+        tb = offt + k * TT_SIZE
+        n = int(p[tb + TT_NRODS])
+        g0 = int(p[tb + TT_ROD0])
+        for i in range(n):
+            gr = g0 + i
+            oa = 0 if i == 0 else 3 * gr
+            ob = 3 + 3 * gr
+            for c in range(3):
+                b[m1 + ob + c] = (xv[ob + c] - xv[oa + c]) / (2.0 * SQ3)
+    for i in range(m1):
+        b[i] = (b[i] + b[m1 + i]) * ginv
+
+
+@njit(cache=True)
+def _sub_q_sinv_y(dst, od, f, ys, oy):
+    """dst[od:od+3] -= Q S^-1 y with y = ys[oy:oy+3], Q and S^-1 from the factor row f of the
+    joint the elimination comes from."""
+    v0 = f[F_SINV] * ys[oy] + f[F_SINV + 1] * ys[oy + 1] + f[F_SINV + 2] * ys[oy + 2]
+    v1 = f[F_SINV + 3] * ys[oy] + f[F_SINV + 4] * ys[oy + 1] + f[F_SINV + 5] * ys[oy + 2]
+    v2 = f[F_SINV + 6] * ys[oy] + f[F_SINV + 7] * ys[oy + 1] + f[F_SINV + 8] * ys[oy + 2]
+    for a in range(3):
+        dst[od + a] -= f[F_Q + 3 * a] * v0 + f[F_Q + 3 * a + 1] * v1 + f[F_Q + 3 * a + 2] * v2
