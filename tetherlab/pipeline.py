@@ -214,7 +214,7 @@ def prepare(scene) -> Prepared:
         duration = scene.duration_orbits * period
     t_out = _output_times(scene.output, duration)
     h_max = scene.integrator.max_step_s or 0.0
-    # events are located in time: with DROMO they run the time form (docs/dromo.md section 8)
+    # events are located in time: with DROMO they run the time form (docs/dromo.md section 10)
     formulation = _formulation(scene, model, tethers, y0, bool(event_names))
     if scene.integrator.method == "abm" and formulation != "dromo-sigma":
         raise SceneError(
