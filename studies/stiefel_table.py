@@ -25,7 +25,7 @@ from tetherlab.benchmarks.stiefel import N_ORBITS, REFERENCE, reference_position
 
 TOLS = tuple(10.0**-k for k in range(4, 14))
 #: ("dromo", "abm"): the constant-step Adams-Bashforth-Moulton method (2 rhs calls a step, against
-#: 12 for DOP853 and 16 for Vern9: compare its n_rhs, not its steps; docs/integrators.md section 6)
+#: 12 for DOP853 and 16 for Vern9: compare its n_rhs, not its steps; docs/integrators.md section 8)
 CASES = (("cowell", "dop853"), ("cowell", "vern9"), ("cowell", "radau5"), ("dromo", "dop853"),
          ("dromo", "vern9"), ("dromo", "radau5"), ("dromo", "abm"))
 
@@ -81,7 +81,7 @@ def write(outdir: Path, table: list[dict]) -> None:
               "search_steps of the CSV): with DOP853 one landing step per output (an event on tau in the "
               "compiled loop), with RADAU5 a Newton search of a few dozen steps.  DROMO abm: constant-step "
               "Adams-Bashforth-Moulton, 2 rhs calls a step (12 for DOP853, 16 for Vern9): compare n_rhs in "
-              "the CSV; docs/integrators.md section 6.", "", footer(), ""]  # fmt: skip
+              "the CSV; docs/integrators.md section 8.", "", footer(), ""]  # fmt: skip
     (outdir / "stiefel_table.md").write_text("\n".join(lines))
 
     import matplotlib

@@ -76,3 +76,26 @@ def test_slack_and_taut_switches_with_dromo_match_cowell():
     # tolerances (measured); DROMO at 1e-10 must be as close to the tight run (16x margin).
     dt = max(abs(a["t_s"] - b["t_s"]) for a, b in zip(ed, ec))
     assert dt < 1e-5, dt
+
+
+def test_abm_is_a_sigma_form_method_only():
+    """'abm' (docs/integrators.md section 8) runs the DROMO sigma form; elsewhere it is refused
+    naming integrator.method."""
+    from tetherlab.errors import SceneError
+
+    no_stop = _point_mass("dromo", 500.0).to_dict()
+    del no_stop["stop"]
+    sc = Scene.from_dict(no_stop).replace(**{"integrator.method": "abm", "duration": "1 h"})
+    ref = tetherlab.simulate(sc.replace(**{"integrator.method": "vern9"}), progress=False)
+    res = tetherlab.simulate(sc, progress=False)
+    # the same Kepler arc by two methods at tol 1e-11: agreement far below a millimetre
+    cols = ["sat.x_m", "sat.y_m", "sat.z_m"]
+    d = np.linalg.norm(res.timeseries[cols].to_numpy() - ref.timeseries[cols].to_numpy(), axis=1)
+    assert d.max() < 1e-4, d.max()
+    for change in ({"integrator.formulation": "cowell"}, {"integrator.formulation": "dromo-time"}):
+        with pytest.raises(SceneError) as info:
+            tetherlab.simulate(sc.replace(**change), progress=False)
+        assert info.value.key == "integrator.method"
+    with pytest.raises(SceneError) as info:  # events: the time form, where abm does not apply
+        tetherlab.simulate(_point_mass("dromo", 500.0).replace(**{"integrator.method": "abm"}), progress=False)
+    assert info.value.key == "integrator.method"

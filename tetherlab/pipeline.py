@@ -320,8 +320,13 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
         duration = scene.duration_orbits * period
     t_out = _output_times(scene.output, duration)
     h_max = scene.integrator.max_step_s or 0.0
-    # events are located in time: with DROMO they run the time form (docs/dromo.md section 8)
+    # events are located in time: with DROMO they run the time form (docs/dromo.md section 10)
     formulation = _formulation(scene, model, tethers, y0, bool(event_names))
+    if scene.integrator.method == "abm" and formulation != "dromo-sigma":
+        raise SceneError(
+            "integrator.method", "'abm' only with formulation 'dromo' on a single body without events (the DROMO "
+            "sigma form; docs/integrators.md section 8)", f"'abm' with the {formulation} formulation",
+        )
     return Prepared(
         model=model,
         y0=y0,

@@ -74,6 +74,7 @@ INTEGRATOR_METHODS = (
     "dop853",
     "vern9",
     "radau5",
+    "abm",  # DROMO sigma form only (pipeline._formulation; docs/integrators.md section 8)
     "scipy:DOP853",
     "scipy:Radau",
     "scipy:LSODA",

@@ -61,7 +61,7 @@ def table(rods=(4, 8, 16, 32, 64, 128, 256), methods=("radau5", "dop853", "vern9
         kernel, newton = ("radau5", "dense") if method == "radau5-dense" else (method, "auto")
         run_one(kernel, 2, 0.0, 0.001, newton=newton)  # compile / load
         for damping in dampings:
-            ns, costs = [], []
+            ns, costs, per_step = [], [], []
             for n in rods:
                 if kernel != "radau5" and n > explicit_max_rods:
                     continue
@@ -73,22 +73,26 @@ def table(rods=(4, 8, 16, 32, 64, 128, 256), methods=("radau5", "dop853", "vern9
                 per_orbit = st["wall_s"] / frac if res.success else float("nan")
                 ns.append(n)
                 costs.append(per_orbit)
+                per_step.append(st["wall_s"] / max(st["n_accepted"] + st["n_rejected"], 1))
                 rows.append({
                     "method": method, "damping_N_s": damping, "rods": n,
                     "s_per_orbit": per_orbit, "steps_per_orbit": st["n_accepted"] / frac,
+                    "ms_per_trial_step": 1e3 * per_step[-1],
                     "rejected": st["n_rejected"], "newton_fail": st["n_newton_fail"],
                     "rhs": st["n_rhs"], "orbit_fraction": frac,
                 })  # fmt: skip
             fits.append({"method": method, "damping_N_s": damping, "rods": f"{ns[0]}-{ns[-1]}",
-                         "fitted_exponent": fit_exponent(ns, costs)})  # fmt: skip
+                         "fitted_exponent": fit_exponent(ns, costs),
+                         "per_step_exponent": fit_exponent(ns, per_step)})  # fmt: skip
     return rows, fits
 
 
 def bench_rows():
     rows, fits = table()
     return rows + [{"method": f["method"], "damping_N_s": f["damping_N_s"], "rods": f["rods"],
-                    "s_per_orbit": f["fitted_exponent"], "steps_per_orbit": "exponent",
-                    "rejected": "", "newton_fail": "", "rhs": "", "orbit_fraction": ""}
+                    "s_per_orbit": f["fitted_exponent"], "steps_per_orbit": "<- exponent of s/orbit",
+                    "ms_per_trial_step": f["per_step_exponent"], "rejected": "<- of ms/step",
+                    "newton_fail": "", "rhs": "", "orbit_fraction": ""}
                    for f in fits]  # fmt: skip
 
 
@@ -105,9 +109,11 @@ def main(argv=None):
     print("| " + " | ".join(keys) + " |\n|" + "---|" * len(keys))
     for r in rows:
         print("| " + " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in r.values()) + " |")
-    print("\n| method | damping_N_s | rods | fitted exponent of s/orbit vs n |\n|---|---|---|---|")
+    print("\n| method | damping_N_s | rods | exponent of s/orbit vs n | exponent of ms/step |")
+    print("|---|---|---|---|---|")
     for f in fits:
-        print(f"| {f['method']} | {f['damping_N_s']:g} | {f['rods']} | {f['fitted_exponent']:.2f} |")
+        print(f"| {f['method']} | {f['damping_N_s']:g} | {f['rods']} | {f['fitted_exponent']:.2f} "
+              f"| {f['per_step_exponent']:.2f} |")
     return 0
 
 

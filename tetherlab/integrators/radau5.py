@@ -104,6 +104,9 @@ THETA_STEP = 0.3
 #: extrapolated collocation polynomial), which halves the rotation of the stiff axial direction
 #: between the Jacobian and the stages (docs/integrators.md, section 7; measured best).
 STRUCT_JAC_EVERY_STEP = 2
+#: Newton iterations allowed with the structured matrix (an iteration costs 3 rhs calls and two
+#: O(n) solves; docs/integrators.md section 7: 7, 10, 14 measured, 10 kept).
+NIT_STRUCT = 10
 
 # Workspace scalar slots (float fs[], int is_[]).
 _F_HOLD = 0
@@ -114,6 +117,7 @@ _F_ERRACC = 4
 _F_HLU = 5
 _F_THSTEP = 6  # Newton-rate step cap target (0: off, Hairer's controller alone); set by the workspace
 _F_JACEVERY = 7  # > 0: a fresh Jacobian on every step (set by the workspace; structured default)
+_F_NIT = 8  # max Newton iterations (0: NIT); set by the workspace
 _I_FIRST = 0
 _I_NEED_JAC = 1
 _I_LU_VALID = 2
@@ -157,7 +161,7 @@ def radau5_workspace(n, m1=0, p=None):
         np.zeros(ne, dtype=np.int64),  # ip2
         np.zeros((4, n)),  # cont: y_new and the 3 coefficients of the collocation polynomial
         np.zeros(n),  # f0 = f(t, y)
-        np.zeros(8),  # float scalars
+        np.zeros(12),  # float scalars
         np.zeros(8, dtype=np.int64),  # int scalars
         blk,  # structured: rod blocks (tether/newton.py)
         sf1,  # structured: real factors
@@ -166,6 +170,7 @@ def radau5_workspace(n, m1=0, p=None):
     ws[8][_I_M1] = m1
     ws[8][_I_STRUCT] = 1 if structured else 0
     ws[7][_F_THSTEP] = THETA_STEP
+    ws[7][_F_NIT] = NIT_STRUCT if structured else NIT
     ws[7][_F_JACEVERY] = float(STRUCT_JAC_EVERY_STEP) if structured else 0.0
     return ws
 
@@ -391,6 +396,7 @@ def radau5_core(
     m1 = is_[_I_M1]
     struct = is_[_I_STRUCT] != 0
     thstep = fs[_F_THSTEP]
+    nit = int(fs[_F_NIT]) if fs[_F_NIT] > 0.0 else NIT
     jac_every = fs[_F_JACEVERY] > 0.0
     jac_mid = fs[_F_JACEVERY] > 1.0
 
@@ -398,7 +404,7 @@ def radau5_core(
     rtol_i = 0.1 * rtol ** (2.0 / 3.0)
     atol_i = atol * (rtol_i / rtol)
     fnewt = max(10.0 * EPS / rtol_i, min(0.03, np.sqrt(rtol_i)))
-    cfac = SAFE * (1 + 2 * NIT)
+    cfac = SAFE * (1 + 2 * nit)
     hmax = h_max if h_max > 0.0 else np.inf
 
     z1 = np.empty(n)
@@ -571,7 +577,7 @@ def radau5_core(
         fail = 0  # 0 ok, RHS_FAILED / NON_FINITE, 10 = Newton failure, 11 = Newton too slow
         hhfac = 1.0
         while True:
-            if newt >= NIT:
+            if newt >= nit:
                 fail = 10
                 break
             # Stage values y + z_k -> f, written back into z_k.
@@ -621,8 +627,8 @@ def radau5_core(
             if not np.isfinite(dyno):
                 fail = NON_FINITE
                 break
-            # Convergence rate; bad convergence or a predicted miss of NIT.
-            if newt > 1 and newt < NIT:
+            # Convergence rate; bad convergence or a predicted miss of nit.
+            if newt > 1 and newt < nit:
                 thq = dyno / dynold
                 if newt == 2:
                     theta = thq
@@ -631,10 +637,10 @@ def radau5_core(
                 thqold = thq
                 if theta < 0.99:
                     faccon = theta / (1.0 - theta)
-                    dyth = faccon * dyno * theta ** (NIT - 1 - newt) / fnewt
+                    dyth = faccon * dyno * theta ** (nit - 1 - newt) / fnewt
                     if dyth >= 1.0 and not fixed_step:
                         qnewt = max(1e-4, min(20.0, dyth))
-                        hhfac = 0.8 * qnewt ** (-1.0 / (4.0 + NIT - 1 - newt))
+                        hhfac = 0.8 * qnewt ** (-1.0 / (4.0 + nit - 1 - newt))
                         fail = 11
                         break
                 else:
@@ -723,7 +729,7 @@ def radau5_core(
                 h = 0.25 * h
                 need_jac = not caljac
                 continue
-            fac = min(SAFE, cfac / (newt + 2 * NIT))
+            fac = min(SAFE, cfac / (newt + 2 * nit))
             quot = max(FACR, min(FACL, err**0.25 / fac))
         hnew = h / quot
 
@@ -914,8 +920,9 @@ def radau5_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stat
     ip2 = np.zeros(n, dtype=np.int64)
     cont = np.zeros((4, n))
     f0 = np.zeros(n)
-    fs = np.zeros(8)
+    fs = np.zeros(12)
     fs[_F_THSTEP] = THETA_STEP
+    fs[_F_NIT] = NIT
     is_ = np.zeros(8, dtype=np.int64)
     ev = np.array([0.0, -1.0, -1.0, 0.0])
     blk = np.zeros((1, _nw.BLK_SIZE))
