@@ -289,3 +289,27 @@ def test_the_templates_themselves_run(template):
     # the undamaged templates are valid scenes that run to their end (so the fuzzing starts from
     # scenes that work, and a refusal is caused by the damage)
     assert check_scene_outcome(copy.deepcopy(template)) == "completed"
+
+
+@pytest.mark.slow
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(scenes())
+def test_tetherlab_run_ends_the_same_way_as_simulate(small_machine, d):
+    # The run-directory path (tetherlab/runstore.py) on the same scenes: the same outcome as
+    # simulate(), recorded in run.json, the outputs readable back.
+    import tempfile
+
+    from tetherlab.result import Result
+    from tetherlab.runstore import run_to_dir
+
+    outcome = check_scene_outcome(d)
+    with tempfile.TemporaryDirectory() as tmp:
+        try:
+            rec = run_to_dir(_tame(Scene.from_dict(d)), tmp, progress=False)
+        except SceneError as exc:
+            assert outcome == "refused" and exc.key
+            return
+        assert outcome == ("completed" if rec["ok"] else "stopped"), rec.get("message")
+        assert rec["state"] == ("complete" if rec["ok"] else "failed")
+        back = Result.load(tmp)
+        assert len(back.timeseries) == rec["rows_done"]
