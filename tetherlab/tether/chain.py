@@ -149,6 +149,9 @@ def rod_forces(t, q, qd, p):
     nq = int(p[H_NQ])
     min_strain = p[H_MIN_STRAIN]
     mutant = int(p[H_MUTANT])  # 0 in every user run (tetherlab/mutants.py: negative controls)
+    damp_sign = -1.0 if mutant == MUT_DAMPING_SIGN else 1.0  # decided once, outside the loops
+    eq19_doubled = mutant == MUT_EQ19_DOUBLED
+    ftp_dropped = mutant == MUT_FTP_DROPPED
     for k in range(nteth):
         tb = offt + k * TT_SIZE
         n = int(p[tb + TT_NRODS])
@@ -169,9 +172,7 @@ def rod_forces(t, q, qd, p):
             m = p[rb + RT_M]
             lu = p[rb + RT_LU]
             ea = p[rb + RT_EA]
-            damp = p[rb + RT_D]
-            if mutant == MUT_DAMPING_SIGN:
-                damp = -damp
+            damp = damp_sign * p[rb + RT_D]
             dx = q[3 + 3 * g]
             dy = q[4 + 3 * g]
             dz = q[5 + 3 * g]
@@ -252,13 +253,13 @@ def rod_forces(t, q, qd, p):
                 if printed:
                     c1 = 2.0 - SQ3
                     c2 = SQ3 - 1.0
-                elif mutant == MUT_EQ19_DOUBLED:  # J_2 + (sqrt3 - 1) J(u): F_T* twice (model.md 2.4)
+                elif eq19_doubled:  # J_2 + (sqrt3 - 1) J(u): F_T* twice (model.md 2.4)
                     c1 = 2.0 * SQ3 - 1.0
                     c2 = 2.0 - 2.0 * SQ3
                 else:
                     c1 = SQ3
                     c2 = 1.0 - SQ3
-                if mutant == MUT_FTP_DROPPED:  # (R_2 - R_1) + 2 F_TP without F_TP (model.md 3)
+                if ftp_dropped:  # (R_2 - R_1) + 2 F_TP without F_TP (model.md 3)
                     qlx = r2x - r1x
                     qly = r2y - r1y
                     qlz = r2z - r1z
