@@ -19,6 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
+from .report import _fmt as _report_fmt
+from .report import table as _report_table
+
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "studies" / "scenes"
 MU_EARTH = 3.986004418e14  # the "earth" preset of tetherlab/scene.py
@@ -641,26 +644,9 @@ def _nest_headings(md: str) -> str:
     return re.sub(r"^(#{1,5}) ", r"#\1 ", "\n".join(lines), flags=re.M)
 
 
-def _table_md(rows):
-    if not rows:
-        return ""
-    keys = []
-    for r in rows:
-        keys += [k for k in r if k not in keys]
-    lines = ["| " + " | ".join(_cell(k) for k in keys) + " |", "|" + "---|" * len(keys)]
-    for r in rows:
-        lines.append("| " + " | ".join(_cell(_fmt(r.get(k, ""))) for k in keys) + " |")
-    return "\n".join(lines)
-
-
-def _cell(text) -> str:
-    return str(text).replace("|", "\\|").replace("\n", " ")
-
-
-def _fmt(v):
-    if isinstance(v, (float, np.floating)):
-        return f"{float(v):.4g}"
-    return str(v)
+# one Markdown table writer for the studies' summaries and the report (tetherlab/report.py)
+_table_md = _report_table
+_fmt = _report_fmt
 
 
 # -- negative controls: every defect of tetherlab.mutants against the gates' cheap probes -----------
