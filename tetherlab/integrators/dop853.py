@@ -21,33 +21,10 @@ import numpy as np
 
 from tetherlab._jit import njit, ptr, row_ptr
 
-from .common import (  # noqa: F401  (re-exported for one release; import from .common)
-    EPS,
-    EVENT,
-    H_FLOOR,
-    MAX_BAD_TRIALS,
-    MAX_CONSECUTIVE_REJECTS,
-    MAX_STEPS,
-    NON_FINITE,
-    OK,
-    RHS_FAILED,
-    ST_ACCEPTED,
-    ST_NEWTON_FAIL,
-    ST_NJAC,
-    ST_NLU,
+from .common import (
     ST_NRHS,
-    ST_REJECTED,
-    ST_RHS_STATUS,
-    STEP_UNDERFLOW,
-    UNDERFLOW_FACTOR,
     all_finite,
-    apply_forced_side,
-    event_time_tolerance,
-    fill_start_outputs,
-    first_crossing,
-    hinit,
     scaled_sq,
-    start_events,
 )
 from .tableau import DOP_A, DOP_B, DOP_C, DOP_D, DOP_E3, DOP_E5
 
