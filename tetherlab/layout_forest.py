@@ -105,9 +105,9 @@ def forest_state(scene, model: Model, topo, mu: float):
     by_name = {b.name: b for b in scene.bodies}
     kindex = {b.name: i for i, b in enumerate(model.bodies) if b.name}
     orbit = scene.orbit
-    if orbit is not None and orbit.motion == "equilibrium":
+    if orbit is not None and orbit.motion in ("equilibrium", "quasi-static"):
         raise SceneError("orbit.motion", "'corotating' or 'translating' for a scene with rigid bodies or a tree other "
-                         "than a star (the relative-equilibrium solve handles stars of point masses)", "'equilibrium'")  # fmt: skip
+                         "than a star (the relative-equilibrium solve handles stars of point masses)", repr(orbit.motion))  # fmt: skip
     if orbit is not None:
         ref = orbit.state(mu)
         if ref is None:

@@ -72,7 +72,7 @@ class Prepared:
     # shape 'equilibrium': the external force R_f on the end mass that holds the starting shape
     # (tetherlab.statics); the run itself applies it only if the scene names it (applied_force)
     holding_force_N: np.ndarray | None = None
-    formulation: str = "cowell"  # "cowell", "dromo-sigma" (point mass) or "dromo-time"
+    formulation: str = "cowell"  # "cowell", "cowell-orbit", "dromo-sigma" (point mass) or "dromo-time"
     mu_m3_s2: float = 0.0
 
 
@@ -394,6 +394,17 @@ def _formulation(scene, model: Model, tethers, y0: np.ndarray, events: bool = Fa
     if name == "cowell":
         return "cowell"
     key = "integrator.formulation"
+    if name == "cowell-orbit":
+        if model.root_fixed:
+            raise SceneError(key, "'cowell' for a scene whose root body is fixed (it has no orbit to turn with)", repr(name))
+        if model.has_attitude:
+            raise SceneError(key, "'cowell' for a scene with rigid bodies (the attitude and wheel states are not "
+                             "carried into the turning frame)", repr(name))  # fmt: skip
+        h = y0.size // 2
+        if not float(np.linalg.norm(np.cross(y0[:3], y0[h : h + 3]))) > 0.0:
+            raise SceneError(key, "'cowell' for a root body with no orbital motion about the centre (r x v = 0: "
+                             "no frame to turn with)", repr(name))  # fmt: skip
+        return "cowell-orbit"
     if "central_gravity" not in model.effect_names:
         # DROMO integrates the Kepler motion about the central body analytically: without
         # central_gravity in [effects] it would add a force the scene did not name
@@ -484,7 +495,7 @@ def _initial_state(scene, model: Model, root_name: str, tethers, mu: float, eq_m
     r_ref, v_ref = ref
     # (a reference point at the centre has no orbit to corotate with: no rotation)
     rr2 = float(r_ref @ r_ref)
-    omega = np.cross(r_ref, v_ref) / rr2 if motion in ("corotating", "equilibrium") and rr2 > 0 else None
+    omega = np.cross(r_ref, v_ref) / rr2 if motion in ("corotating", "equilibrium", "quasi-static") and rr2 > 0 else None
     dirs, strains = [], []
     for t in tethers:
         ini = t.initial
@@ -513,9 +524,91 @@ def _initial_state(scene, model: Model, root_name: str, tethers, mu: float, eq_m
     h = y0.size // 2
     y0[:3] = r0
     y0[h : h + 3] = v0
-    if motion == "equilibrium":
+    if motion in ("equilibrium", "quasi-static"):
         y0 = _relative_equilibrium(eq_model or model, y0, r_ref, v_ref, omega, reference, root_name, tethers)
+    if motion == "quasi-static":
+        y0 = _quasi_static(model, y0, r_ref, reference, root_name, tethers)
     return y0, r_ref, v_ref, sides
+
+
+def _rigidly_rotating(model, y0, d, W, r_ref, reference, root_name, tethers):
+    """y0 with the rod vectors ``d`` (nrods x 3), the reference point at ``r_ref`` and every point
+    rotating rigidly with ``W`` about the centre of the central body."""
+    h = y0.size // 2
+    y = y0.copy()
+    y[3:h] = d.ravel()
+    if reference == "center_of_mass":
+        y[:3] = 0.0
+        c, _ = center_of_mass(model, y)
+    elif reference == root_name:
+        c = np.zeros(3)
+    else:
+        from .system import point_positions
+
+        y[:3] = 0.0
+        k = [t.to_body for t in tethers].index(reference)
+        c = point_positions(model, y)["joints"][k][-1]
+    y[:3] = r_ref - c if reference != root_name else r_ref
+    y[h : h + 3] = np.cross(W, y[:3])
+    y[h + 3 :] = np.cross(W, d).ravel()
+    return y
+
+
+def _quasi_static(model, y0, r_ref, reference, root_name, tethers):
+    """The rigidly rotating configuration under every effect of the scene at t = 0 (docs/model.md,
+    section 8.1; ``orbit.motion = "quasi-static"``).
+
+    Starts from the relative equilibrium ``y0`` of the conservative effects (spin rate W kept) and
+    solves all three components of every rod vector d_g so that, in the frame rotating with W, every
+    rod's relative acceleration d''_g - W x (W x d_g) vanishes: the tether takes the bowed and tilted
+    shape the non-conservative forces (electrodynamic, drag) hold it in at t = 0.  Those forces
+    vary along the orbit at the orbital frequency, far below the tether's lateral modes, so from
+    this start the lateral modes are hardly excited; from the straight start they ring undamped for
+    the whole run (the de-orbit: docs/integrators.md, section 9).  The centre of mass still
+    decelerates: only the relative motion is in equilibrium.  Newton with a finite-difference
+    Jacobian (3 n unknowns; set-up cost only).
+    """
+    from .formulations.cowell import cowell_rhs_py
+
+    nrods = model.n_rods
+    h = y0.size // 2
+    r0 = y0[:3]
+    W = np.cross(r0, y0[h : h + 3]) / float(r0 @ r0)  # the rigid rotation of the equilibrium
+    w2 = float(W @ W)
+    d0 = y0[3:h].reshape(nrods, 3)
+    size = 2 * math.sqrt(3) * float(np.linalg.norm(d0, axis=1).sum())
+    dscale = float(np.max(np.linalg.norm(d0, axis=1)))
+
+    def residual(x):
+        d = x.reshape(nrods, 3)
+        y = _rigidly_rotating(model, y0, d, W, r_ref, reference, root_name, tethers)
+        acc = cowell_rhs_py(model, y)[h + 3 :].reshape(nrods, 3)
+        return (acc - np.cross(W, np.cross(W, d))).ravel() / (w2 * size)
+
+    x = d0.ravel().copy()
+    f = residual(x)
+    step_max = np.inf
+    for _ in range(30):
+        J = np.empty((x.size, x.size))
+        for j in range(x.size):
+            dx = 1e-7 * max(1.0, abs(x[j]))
+            xp = x.copy()
+            xp[j] += dx
+            J[:, j] = (residual(xp) - f) / dx
+        step = np.linalg.lstsq(J, f, rcond=None)[0]
+        x = x - step
+        f = residual(x)
+        step_max = float(np.max(np.abs(step)))
+        # The rod vectors to 1e-10 of their length: the residual has a round-off floor (orbital
+        # accelerations of ~8 m/s^2 against tidal ones of ~1e-3 m/s^2), the step does not.
+        if step_max < 1e-10 * dscale:
+            break
+    if not step_max < 1e-10 * dscale:
+        raise SceneError(
+            "orbit.motion", "a configuration with a quasi-static equilibrium under every effect (Newton converging)",
+            f"last Newton step {step_max:.3g} m on rod vectors of {dscale:.3g} m after 30 iterations",
+        )
+    return _rigidly_rotating(model, y0, x.reshape(nrods, 3), W, r_ref, reference, root_name, tethers)
 
 
 def _relative_equilibrium(model, y0, r_ref, v_ref, omega, reference, root_name, tethers):
@@ -538,26 +631,8 @@ def _relative_equilibrium(model, y0, r_ref, v_ref, omega, reference, root_name, 
     size = 2 * math.sqrt(3) * float(np.linalg.norm(d0, axis=1).sum())  # whole tether length
 
     def build(x):
-        y = y0.copy()
         W = x[-1] * w0 * zhat
-        d = d0 * x[:-1, None]
-        y[3:h] = d.ravel()
-        if reference == "center_of_mass":
-            y[:3] = 0.0
-            c, _ = center_of_mass(model, y)
-        elif reference == root_name:
-            c = np.zeros(3)
-        else:
-            from .system import point_positions
-
-            y[:3] = 0.0
-            k = [t.to_body for t in tethers].index(reference)
-            c = point_positions(model, y)["joints"][k][-1]
-        y[:3] = r_ref - c if reference != root_name else r_ref
-        # rigid rotation with W about the centre of the central body
-        y[h : h + 3] = np.cross(W, y[:3])
-        y[h + 3 :] = np.cross(W, d).ravel()
-        return y, W
+        return _rigidly_rotating(model, y0, d0 * x[:-1, None], W, r_ref, reference, root_name, tethers), W
 
     def residual(x):
         y, W = build(x)
@@ -645,10 +720,7 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     p = prep.model.fresh_params()
     bar = _ProgressBar(prep.t_out[-1], enabled=progress)
     t_wall = time.perf_counter()
-    if prep.formulation != "cowell":
-        res, p = _integrate_dromo(prep, p, bar.update)
-    else:
-        res = _integrate_cowell(prep, p, bar.update)
+    res, p = integrate_prepared(prep, p, bar.update)
     bar.close()
     stats, message = run_outcome(prep, res, p, time.perf_counter() - t_wall)
     d = diag.compute(prep.model, res.t, res.y)
@@ -673,6 +745,38 @@ def run_outcome(prep: Prepared, res, p: np.ndarray, total_wall_s: float) -> tupl
     stats["stopped_by"] = None if stopped is None else prep.event_names[stopped]
     message = res.message if res.status == 0 else failure_message(p, prep.model, res.status, res.t_end, res.message)
     return stats, message
+
+
+def integrate_prepared(prep: Prepared, p: np.ndarray, progress=None):
+    """Integrate a prepared scene with its formulation; returns (result, the parameter block used).
+
+    The result's states are Cowell states [q, q', attitude, wheels] whatever the formulation."""
+    if prep.formulation == "cowell":
+        return _integrate_cowell(prep, p, progress), p
+    if prep.formulation == "cowell-orbit":
+        return _integrate_cowell_orbit(prep, p, progress)
+    return _integrate_dromo(prep, p, progress)
+
+
+def _integrate_cowell_orbit(prep: Prepared, p: np.ndarray, progress):
+    """Cowell in the frame turning with the orbit, outputs turned back to inertial Cowell states
+    (formulations/cowell_orbit.py).  The event functions are frame invariant (|r0|, rod tensions)."""
+    from .formulations import cowell_orbit as co
+    from .integrators.driver import integrate
+
+    nqt = prep.model.n_qt
+    omega = co.frame_rate(prep.y0, nqt)
+    pe = co.attach(p, omega)
+    y0 = co.to_frame(0.0, prep.y0, omega, nqt)
+    res = integrate(prep.method, co.cowell_orbit_rhs, 0.0, y0, prep.t_out, pe, prep.rtol, prep.atol,
+                    h_max=prep.h_max, max_steps=prep.max_steps, progress=progress, second_order=True,
+                    **_event_args(prep))  # fmt: skip
+    import dataclasses
+
+    y = co.to_inertial(res.t, res.y, omega, nqt) if len(res.t) else res.y
+    y_end = co.to_inertial([res.t_end], res.y_end, omega, nqt)[0]
+    res.stats["frame_rad_s"] = omega.tolist()
+    return dataclasses.replace(res, y=y, y_end=y_end), pe
 
 
 def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):

@@ -106,6 +106,8 @@ def estimate(scene) -> Need | None:
         fixed["integrator.method"] = 8 * (n * n + half * half + 4 * half * half)
     if scene.orbit is not None and scene.orbit.motion == "equilibrium":
         fixed["orbit.motion"] = 8 * 2 * (nr + 1) ** 2
+    elif scene.orbit is not None and scene.orbit.motion == "quasi-static":
+        fixed["orbit.motion"] = 8 * 2 * (3 * nr) ** 2  # the 3n x 3n finite-difference Jacobian, twice
     return Need(rows, okey, n, row_mem, row_disk, sum(fixed.values()))
 
 

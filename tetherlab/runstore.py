@@ -417,20 +417,17 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
 
 def _run_in_memory(store: _Store, record: dict, progress):
     """DROMO and scipy runs: integrated in memory, written when they end (no checkpoints)."""
-    from .pipeline import _integrate_cowell, _integrate_dromo, _ProgressBar
+    from .pipeline import _ProgressBar, integrate_prepared
 
     prep = store.prep
     p = prep.model.fresh_params()
     bar = _ProgressBar(prep.t_out[-1], enabled=progress)
     t_wall = time.perf_counter()
     try:
-        if prep.formulation != "cowell":
-            res, p = _integrate_dromo(prep, p, bar.update)
-        else:
-            res = _integrate_cowell(prep, p, bar.update)
+        res, p = integrate_prepared(prep, p, bar.update)
     except KeyboardInterrupt:
         record["state"] = "interrupted"
-        record["message"] = "interrupted; this run keeps no checkpoints (DROMO or a scipy method): nothing was saved"
+        record["message"] = "interrupted; this run keeps no checkpoints (DROMO, cowell-orbit or a scipy method): nothing was saved"
         _write_json(store.out / RUN_JSON, record)
         raise Interrupted(store.out, math.nan, float(prep.t_out[-1]), 0, resumable=False) from None
     finally:

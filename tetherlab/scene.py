@@ -69,7 +69,7 @@ TETHER_MODELS = ("paper", "energy")
 SHAPES = ("straight", "rods", "equilibrium")
 EQUILIBRIUM = "equilibrium"  # static shape between two placed ends (tetherlab.statics)
 SIDES = ("up", "down")
-MOTIONS = ("corotating", "translating", "equilibrium")
+MOTIONS = ("corotating", "translating", "equilibrium", "quasi-static")
 INTEGRATOR_METHODS = (
     "dop853",
     "vern9",
@@ -278,11 +278,12 @@ class IntegratorSpec:
     max_steps: int | None = None
     # "cowell", or "dromo": the orbit in DROMO elements (docs/dromo.md); for a single point mass
     # with the ideal anomaly as independent variable, with tethers in time form; "dromo-time":
-    # the time form always
+    # the time form always; "cowell-orbit": Cowell's equations in a frame turning uniformly with
+    # the orbit (formulations/cowell_orbit.py), for RADAU5 on many-rod tethers
     formulation: str = "cowell"
 
 
-FORMULATIONS = ("cowell", "dromo", "dromo-time")
+FORMULATIONS = ("cowell", "dromo", "dromo-time", "cowell-orbit")
 
 
 @dataclass(frozen=True)

@@ -56,10 +56,10 @@ def run_until_altitude(scene, stop_altitude_m=STOP_ALTITUDE_M, max_days=200) -> 
     sc = scene.replace(**{"duration": f"{max_days} d", "stop.altitude": f"{stop_altitude_m} m"})
     prep = prepare(sc)
     p = prep.model.fresh_params()
-    if prep.formulation != "cowell":  # DROMO: the time form, the stop located as with Cowell
-        from ..pipeline import _integrate_dromo
+    if prep.formulation != "cowell":  # DROMO (the time form) or the frame turning with the orbit
+        from ..pipeline import integrate_prepared
 
-        res, _ = _integrate_dromo(prep, p, None)
+        res, _ = integrate_prepared(prep, p, None)
     else:
         res = integrate(prep.method, cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol,
                         h_max=prep.h_max, max_steps=prep.max_steps, second_order=True,

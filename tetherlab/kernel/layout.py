@@ -76,6 +76,7 @@ MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 FORM_COWELL = 1
 FORM_DROMO_SIGMA = 2   # DROMO, ideal anomaly sigma independent (point mass)
 FORM_DROMO_TIME = 3    # DROMO elements of the root body, time independent (any scene)
+FORM_COWELL_ORBIT = 4  # Cowell in a frame turning uniformly with the orbit (formulations/cowell_orbit.py)
 
 # -- tether models ---------------------------------------------------------------------------------
 MODEL_PAPER = 0    # published TMED equations (eq. 26 with the eq. 20 sign corrected)

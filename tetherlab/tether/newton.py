@@ -34,6 +34,7 @@ import numpy as np
 from .._jit import njit
 from ..kernel.layout import (
     FORM_COWELL,
+    FORM_COWELL_ORBIT,
     H_FORM,
     H_LEN,
     H_NRODS,
@@ -78,7 +79,8 @@ def structure_supported(p, n_state, second_order):
         return "the state is not declared second order (y = [q, q'])"
     if p.size < H_SIZE or int(p[H_LEN]) != p.size:
         return "p is not a tether model's parameter block"
-    if int(p[H_FORM]) != FORM_COWELL:
+    if int(p[H_FORM]) not in (FORM_COWELL, FORM_COWELL_ORBIT):
+        # (in the frame turning with the orbit the rod blocks are the same functions of d, d')
         return f"formulation code {int(p[H_FORM])} is not Cowell's"
     nrods = int(p[H_NRODS])
     expect = 2 * (3 + 3 * nrods)

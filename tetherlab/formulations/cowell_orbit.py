@@ -1,0 +1,176 @@
+"""Cowell's equations in a frame turning uniformly with the reference orbit ("cowell-orbit").
+
+Why: RADAU5's simplified Newton iteration uses one Jacobian for the three stages of a step.  The
+stiff axial force of a rod acts along the rod, and in the inertial frame a tether on a circular
+orbit turns at the orbital rate Omega, so the stiff direction turns by Omega h within a step.  The
+iteration's contraction then grows like h^4 (the rotated axial stiffness couples into the soft
+lateral directions; docs/integrators.md section 9) and limits the step to a few seconds on a
+many-rod tether, far below what the error allows.  In a frame turning with the orbit the tether is
+nearly at rest: only its libration and the drift of the orbit's rate turn it, and the same
+Jacobian serves the whole step.
+
+Frame: R(t) rotates about the fixed unit axis k by the angle w t (omega = w k, set at t = 0 from the
+root body's r x v / |r|^2: for the relative equilibria of ``orbit.motion`` exactly the rigid
+rotation of the start).  Every 3-vector of q_trans (root positions and rod vectors d_i) is stored
+in the frame's components, q_in = R q, and its rate as the frame-relative rate v = q' with
+q_in' = R (v + omega x q).  Then (a the inertial acceleration of the same vector, in the frame's
+components)
+
+    q'' = R^T a(R q, R (v + omega x q)) - 2 omega x v - omega x (omega x q),
+
+with a the unchanged Cowell right-hand side (tether/chain.py, every effect): the forces are
+computed on the inertial state and only the kinematics change.  The elastic and damping forces of
+a rod depend on |d| and d . d', both invariant (d . (omega x d) = 0), so the structured Newton
+matrix (tether/newton.py) and the event functions (kernel/events.py: |r0| and the rod tensions)
+apply to the frame's state unchanged.  The Coriolis and centrifugal terms (order Omega, Omega^2)
+are not stiff and are left out of the Newton matrix.
+
+Parameter block (appended to the model's p, header H_OFF_FORM): OP_W (3) omega in rad/s, then
+scratch for the inertial state and its derivative (2 x H_NSTATE).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import carray
+
+from .._jit import njit, rhs_cfunc
+from ..kernel.layout import FORM_COWELL_ORBIT, H_FORM, H_LEN, H_NQT, H_NSTATE, H_OFF_FORM
+from ..tether.chain import system_accelerations
+
+OP_W = 0
+OP_SCR = 3
+
+
+def attach(p: np.ndarray, omega_rad_s: np.ndarray) -> np.ndarray:
+    """A copy of the model's parameter block with the frame block appended (header H_OFF_FORM)."""
+    omega = np.asarray(omega_rad_s, dtype=float).reshape(3)
+    if not (np.all(np.isfinite(omega)) and float(omega @ omega) > 0.0):
+        raise ValueError(f"omega_rad_s: expected a finite non-zero angular velocity; got {omega.tolist()}")
+    n = int(p[H_NSTATE])
+    block = np.zeros(OP_SCR + 2 * n)
+    block[OP_W : OP_W + 3] = omega
+    off = p.size
+    out = np.concatenate([p, block])
+    out[H_LEN] = out.size
+    out[H_OFF_FORM] = off
+    out[H_FORM] = FORM_COWELL_ORBIT
+    return out
+
+
+@njit(cache=True)
+def _rot(kx, ky, kz, c, s, v0, v1, v2):
+    """Rodrigues: v rotated by the angle (cos c, sin s) about the unit axis k."""
+    kv = kx * v0 + ky * v1 + kz * v2
+    cx = ky * v2 - kz * v1
+    cy = kz * v0 - kx * v2
+    cz = kx * v1 - ky * v0
+    return (v0 * c + cx * s + kx * kv * (1.0 - c),
+            v1 * c + cy * s + ky * kv * (1.0 - c),
+            v2 * c + cz * s + kz * kv * (1.0 - c))  # fmt: skip
+
+
+@rhs_cfunc
+def cowell_orbit_rhs(t, y_ptr, dy_ptr, p_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    n = int(p[H_NSTATE])
+    y = carray(y_ptr, (n,))
+    dy = carray(dy_ptr, (n,))
+    h = int(p[H_NQT])
+    off = int(p[H_OFF_FORM])
+    wx = p[off + OP_W]
+    wy = p[off + OP_W + 1]
+    wz = p[off + OP_W + 2]
+    w = math.sqrt(wx * wx + wy * wy + wz * wz)
+    kx = wx / w
+    ky = wy / w
+    kz = wz / w
+    c = math.cos(w * t)
+    s = math.sin(w * t)
+    yi = p[off + OP_SCR : off + OP_SCR + n]
+    ai = p[off + OP_SCR + n : off + OP_SCR + 2 * n]
+    for j in range(h // 3):
+        o = 3 * j
+        q0 = y[o]
+        q1 = y[o + 1]
+        q2 = y[o + 2]
+        v0 = y[h + o] + wy * q2 - wz * q1
+        v1 = y[h + o + 1] + wz * q0 - wx * q2
+        v2 = y[h + o + 2] + wx * q1 - wy * q0
+        yi[o], yi[o + 1], yi[o + 2] = _rot(kx, ky, kz, c, s, q0, q1, q2)
+        yi[h + o], yi[h + o + 1], yi[h + o + 2] = _rot(kx, ky, kz, c, s, v0, v1, v2)
+    for i in range(2 * h, n):  # (no first-order blocks: rigid bodies are refused at load)
+        yi[i] = y[i]
+    st = system_accelerations(t, yi[:h], yi[h : 2 * h], yi[2 * h :], p, ai[h : 2 * h], ai[2 * h :])
+    for j in range(h // 3):
+        o = 3 * j
+        a0, a1, a2 = _rot(kx, ky, kz, c, -s, ai[h + o], ai[h + o + 1], ai[h + o + 2])
+        q0 = y[o]
+        q1 = y[o + 1]
+        q2 = y[o + 2]
+        v0 = y[h + o]
+        v1 = y[h + o + 1]
+        v2 = y[h + o + 2]
+        # omega x q, then omega x (omega x q), and omega x v
+        e0 = wy * q2 - wz * q1
+        e1 = wz * q0 - wx * q2
+        e2 = wx * q1 - wy * q0
+        dy[h + o] = a0 - 2.0 * (wy * v2 - wz * v1) - (wy * e2 - wz * e1)
+        dy[h + o + 1] = a1 - 2.0 * (wz * v0 - wx * v2) - (wz * e0 - wx * e2)
+        dy[h + o + 2] = a2 - 2.0 * (wx * v1 - wy * v0) - (wx * e1 - wy * e0)
+    for i in range(2 * h, n):
+        dy[i] = ai[i]
+    for i in range(h):
+        dy[i] = y[h + i]
+    return st
+
+
+def _rotation_matrices(t: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """R(t) for every time (shape (m, 3, 3)): the frame's components to inertial ones."""
+    w = float(np.linalg.norm(omega))
+    k = omega / w
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    ang = w * np.atleast_1d(np.asarray(t, dtype=float))
+    s = np.sin(ang)[:, None, None]
+    c = np.cos(ang)[:, None, None]
+    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
+
+
+def to_inertial(t, Y, omega_rad_s, n_qt: int) -> np.ndarray:
+    """Cowell states [q, q_in'] (rows) from frame states [q, v] at the times ``t``."""
+    omega = np.asarray(omega_rad_s, dtype=float)
+    Y = np.atleast_2d(np.asarray(Y, dtype=float))
+    R = _rotation_matrices(t, omega)
+    m = Y.shape[0]
+    q = Y[:, :n_qt].reshape(m, -1, 3)
+    v = Y[:, n_qt : 2 * n_qt].reshape(m, -1, 3) + np.cross(omega, q)
+    out = Y.copy()
+    out[:, :n_qt] = np.einsum("mij,mkj->mki", R, q).reshape(m, -1)
+    out[:, n_qt : 2 * n_qt] = np.einsum("mij,mkj->mki", R, v).reshape(m, -1)
+    return out
+
+
+def to_frame(t: float, y, omega_rad_s, n_qt: int) -> np.ndarray:
+    """The frame state [q, v] of one Cowell state y at the time t."""
+    omega = np.asarray(omega_rad_s, dtype=float)
+    y = np.asarray(y, dtype=float)
+    R = _rotation_matrices(t, omega)[0]
+    q_in = y[:n_qt].reshape(-1, 3)
+    q = q_in @ R  # R^T q_in for every row
+    v = y[n_qt : 2 * n_qt].reshape(-1, 3) @ R - np.cross(omega, q)
+    out = y.copy()
+    out[:n_qt] = q.ravel()
+    out[n_qt : 2 * n_qt] = v.ravel()
+    return out
+
+
+def frame_rate(y0: np.ndarray, n_qt: int) -> np.ndarray:
+    """omega of the frame: the root body's r x v / |r|^2 at the start."""
+    r = y0[:3]
+    v = y0[n_qt : n_qt + 3]
+    rr = float(r @ r)
+    if not rr > 0.0:
+        raise ValueError("the root body is at the centre of the central body: no orbit to turn with")
+    return np.cross(r, v) / rr
