@@ -144,6 +144,8 @@ EXTRA_SECTIONS = (
     ("stiefel", "Stiefel-Scheifele, Examples 2 (ex2: J2 + Moon) and 1 (ex1: J2 only): tetherlab's best method "
                 "against heyoka at 1 m and 1 mm final error (issues 3, 12); cost exponent x: wall ~ error^-x"),
     ("deorbit", "Electrodynamic de-orbit, n = 1, whole mission, every integrator (issue 3)"),
+    ("deorbit_rods", "Electrodynamic de-orbit against the rod count: RADAU5, formulation cowell-orbit, "
+                     "quasi-static start, rtol 1e-8 (issue 11; targets n = 16 <= 60 s, n = 64 <= 5 min)"),
     ("cost_vs_n", "Cost per simulated orbit against the rod count, bench-libration rtol 1e-8, "
                   "damped and undamped; last rows: fitted exponents (issue 11)"),
     ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity (issue 13)"),

@@ -105,12 +105,59 @@ def bench_rows() -> list[dict]:
     return table()
 
 
+#: The many-rod mission (issue 11): RADAU5 in the frame turning with the orbit, from the
+#: quasi-static start (docs/integrators.md section 9).
+RODS_SETTINGS = {"integrator.method": "radau5", "integrator.formulation": "cowell-orbit",
+                 "orbit.motion": "quasi-static", "integrator.rtol": 1e-8, "integrator.atol": 1e-8}  # fmt: skip
+
+
+def rods_table(rods=(1, 4, 16, 64), scene_path=SCENE, settings=None) -> list[dict]:
+    """The whole de-orbit against the rod count: de-orbit time, its change from n = 1, wall time
+    (integration only, compilation excluded) and the fitted exponent of wall time against n."""
+    from ..benchmarks.cost_vs_n import fit_exponent
+    from ..scene import load_scene
+
+    settings = RODS_SETTINGS if settings is None else settings
+    base = load_scene(scene_path).replace(**settings)
+    rows = []
+    for n in rods:
+        sc = base.replace(**{"tethers.main.rods": n})
+        run_until_altitude(sc.replace(duration="0.01 d"), max_days=0.01)  # warm-up (set-up code)
+        t_wall = time.perf_counter()
+        m = run_until_altitude(sc)
+        total = time.perf_counter() - t_wall
+        rows.append({
+            "rods": n, "deorbit_days": m.crossing_s / DAY_S, "deorbit_s": m.crossing_s,
+            "change_from_n1_s": float("nan"), "integrate_s": m.wall_s, "total_s": total,
+            "steps": int(m.stats.get("n_accepted", 0)), "rejected": int(m.stats.get("n_rejected", 0)),
+            "newton_fail": int(m.stats.get("n_newton_fail", 0)), "rhs": int(m.stats.get("n_rhs", 0)),
+            "status": m.status,
+        })  # fmt: skip
+    first = rows[0]["deorbit_s"] if rods and rods[0] == 1 else float("nan")
+    for r in rows:
+        r["change_from_n1_s"] = r["deorbit_s"] - first
+    rows.append({"rods": f"{rods[0]}-{rods[-1]}", "deorbit_days": "", "deorbit_s": "", "change_from_n1_s": "",
+                 "integrate_s": fit_exponent([r["rods"] for r in rows], [r["integrate_s"] for r in rows]),
+                 "total_s": "<- exponent of integrate_s vs n", "steps": "", "rejected": "",
+                 "newton_fail": "", "rhs": "", "status": ""})  # fmt: skip
+    return rows
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--methods", nargs="*", default=list(DEFAULT_METHODS), help="integrators to time")
     ap.add_argument("--rtol", type=float, default=None, help="one rtol for every method")
     ap.add_argument("--rods", type=int, default=1)
+    ap.add_argument("--rod-counts", type=int, nargs="*", default=None,
+                    help="the many-rod table instead: cowell-orbit, quasi-static start, RADAU5 1e-8 (issue 11)")
     args = ap.parse_args(argv)
+    if args.rod_counts:
+        rows = rods_table(tuple(args.rod_counts))
+        keys = list(rows[0])
+        print("| " + " | ".join(keys) + " |\n|" + "---|" * len(keys))
+        for r in rows:
+            print("| " + " | ".join(f"{v:.10g}" if isinstance(v, float) else str(v) for v in r.values()) + " |")
+        return 0
     methods = {m: (args.rtol if args.rtol is not None else DEFAULT_METHODS.get(m, 1e-8)) for m in args.methods}
     rows = table(methods, rods=args.rods)
     keys = list(rows[0])
