@@ -87,9 +87,10 @@ def test_turning_frame_agrees_with_the_inertial_run():
     assert np.max(np.abs(ya[h:] - yb[h:])) < 1e-5
     # negative control: outputs turned back with a frame rate 1e-6 off (a wrong frame kinematics
     # far smaller than a wrong Coriolis term) move the root by r w 1e-6 t = 3 cm: the bound fails
-    omega = np.asarray(b.stats["frame_rad_s"])
-    yf = co.to_frame(b.t[-1], yb, omega, h)
-    wrong = co.to_inertial([b.t[-1]], yf, omega * (1 + 1e-6), h)[0]
+    (t_a, *omega), = b.stats["frame_anchors"]  # one frame: the run is shorter than its re-anchoring
+    omega = np.asarray(omega)
+    yf = co.to_frame(b.t[-1] - t_a, yb, omega, h)
+    wrong = co.to_inertial([b.t[-1] - t_a], yf, omega * (1 + 1e-6), h)[0]
     assert np.max(np.abs(ya[:3] - wrong[:3])) > 1e-2
 
 
@@ -168,3 +169,24 @@ def test_quasi_static_equals_equilibrium_without_nonconservative_forces():
     b = prepare(_deorbit(**kv, **{"orbit.motion": "equilibrium"}))
     h = a.y0.size // 2
     np.testing.assert_allclose(a.y0[3:h], b.y0[3:h], rtol=0, atol=1e-10 * 400)
+
+
+def test_reanchored_frame_agrees_with_the_inertial_run_and_keeps_every_output():
+    """Re-anchoring (pipeline.ANCHOR_ORBITS) restarts the run in a new frame every few orbits:
+    with anchors every 0.2 orbits the outputs are the same times and states as the inertial run's
+    (budget as in the test above, over 0.15 d)."""
+    import tetherlab.pipeline as pl
+
+    kv = {"duration": "0.15 d", "output.step": "600 s", "integrator.rtol": 1e-10, "integrator.atol": 1e-10}
+    _, a = _run(_deorbit(**kv, **{"integrator.formulation": "cowell"}))
+    old = pl.ANCHOR_ORBITS
+    pl.ANCHOR_ORBITS = 0.2
+    try:
+        _, b = _run(_deorbit(**kv, **{"integrator.formulation": "cowell-orbit"}))
+    finally:
+        pl.ANCHOR_ORBITS = old
+    assert len(b.stats["frame_anchors"]) >= 10
+    np.testing.assert_array_equal(a.t, b.t)
+    h = a.y.shape[1] // 2
+    assert np.max(np.abs(a.y[:, :h] - b.y[:, :h])) < 1e-2
+    assert np.max(np.abs(a.y[:, h:] - b.y[:, h:])) < 1e-5

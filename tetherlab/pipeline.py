@@ -758,25 +758,71 @@ def integrate_prepared(prep: Prepared, p: np.ndarray, progress=None):
     return _integrate_dromo(prep, p, progress)
 
 
+#: The frame of formulation "cowell-orbit" is re-anchored (its rate reset to the root body's) every
+#: this many reference orbital periods (docs/integrators.md section 9: measured 2, 5, 20, never).
+ANCHOR_ORBITS = 5.0
+
+
 def _integrate_cowell_orbit(prep: Prepared, p: np.ndarray, progress):
     """Cowell in the frame turning with the orbit, outputs turned back to inertial Cowell states
-    (formulations/cowell_orbit.py).  The event functions are frame invariant (|r0|, rod tensions)."""
+    (formulations/cowell_orbit.py).  The event functions are frame invariant (|r0|, rod tensions).
+
+    The run is a sequence of segments of ANCHOR_ORBITS reference periods; each starts from the
+    inertial state reached by the last with a frame anchored there (its rate the root body's r x v
+    / |r|^2 then), so the frame keeps up with a decaying orbit.  A failure or a terminal event ends
+    the sequence with every output computed so far."""
+    import dataclasses
+
     from .formulations import cowell_orbit as co
     from .integrators.driver import integrate
 
     nqt = prep.model.n_qt
-    omega = co.frame_rate(prep.y0, nqt)
-    pe = co.attach(p, omega)
-    y0 = co.to_frame(0.0, prep.y0, omega, nqt)
-    res = integrate(prep.method, co.cowell_orbit_rhs, 0.0, y0, prep.t_out, pe, prep.rtol, prep.atol,
-                    h_max=prep.h_max, max_steps=prep.max_steps, progress=progress, second_order=True,
-                    **_event_args(prep))  # fmt: skip
-    import dataclasses
-
-    y = co.to_inertial(res.t, res.y, omega, nqt) if len(res.t) else res.y
-    y_end = co.to_inertial([res.t_end], res.y_end, omega, nqt)[0]
-    res.stats["frame_rad_s"] = omega.tolist()
-    return dataclasses.replace(res, y=y, y_end=y_end), pe
+    t_out = prep.t_out
+    t_last = float(t_out[-1])
+    seg_s = ANCHOR_ORBITS * prep.ref_period_s if math.isfinite(prep.ref_period_s) else t_last
+    t_a, y_in = 0.0, prep.y0.copy()
+    ts, ys, events, anchors = [], [], [], []
+    sums: dict = {}
+    budget = prep.max_steps
+    k_out = 0  # first output not yet produced
+    pe = p
+    while True:
+        t_b = min(t_a + seg_s, t_last)
+        if t_last - t_b < 1e-6 * seg_s:  # no sliver of a segment at the end
+            t_b = t_last
+        k_end = int(np.searchsorted(t_out, t_b, side="right"))
+        seg_t = t_out[k_out:k_end]
+        extra = seg_t.size == 0 or seg_t[-1] < t_b
+        if extra:
+            seg_t = np.concatenate([seg_t, [t_b]])
+        omega = co.frame_rate(y_in, nqt)
+        anchors.append([t_a, *omega.tolist()])
+        pe = co.attach(p, omega, t_a)
+        res = integrate(prep.method, co.cowell_orbit_rhs, t_a, co.to_frame(0.0, y_in, omega, nqt), seg_t, pe,
+                        prep.rtol, prep.atol, h_max=prep.h_max, max_steps=budget, progress=progress,
+                        second_order=True, **_event_args(prep))  # fmt: skip
+        for key, v in res.stats.items():
+            if isinstance(v, (int, float)) and not isinstance(v, bool):
+                sums[key] = sums.get(key, 0) + v
+            else:
+                sums.setdefault(key, v)
+        budget -= int(res.stats["n_accepted"])
+        events.extend(res.events)
+        y_rows = co.to_inertial(res.t - t_a, res.y, omega, nqt) if len(res.t) else res.y
+        y_in = co.to_inertial([res.t_end - t_a], res.y_end, omega, nqt)[0]
+        ended = res.status != 0 or res.stopped_by is not None or t_b >= t_last
+        keep = len(res.t) - (1 if (extra and res.stopped_by is None and len(res.t) == seg_t.size) else 0)
+        ts.append(res.t[:keep])
+        ys.append(y_rows[:keep])
+        k_out += min(keep, k_end - k_out)
+        if ended or budget <= 0:
+            break
+        t_a = float(res.t_end)
+    sums["frame_anchors"] = anchors  # [t_a, omega_x, omega_y, omega_z] of every segment
+    sums["n_events"] = len(events)
+    res = dataclasses.replace(res, t=np.concatenate(ts), y=np.concatenate(ys), y_end=y_in, stats=sums,
+                              events=tuple(events))  # fmt: skip
+    return res, pe
 
 
 def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):

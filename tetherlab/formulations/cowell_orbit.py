@@ -9,9 +9,11 @@ many-rod tether, far below what the error allows.  In a frame turning with the o
 nearly at rest: only its libration and the drift of the orbit's rate turn it, and the same
 Jacobian serves the whole step.
 
-Frame: R(t) rotates about the fixed unit axis k by the angle w t (omega = w k, set at t = 0 from the
-root body's r x v / |r|^2: for the relative equilibria of ``orbit.motion`` exactly the rigid
-rotation of the start).  Every 3-vector of q_trans (root positions and rod vectors d_i) is stored
+Frame: R(t) rotates about the fixed unit axis k by the angle w (t - t_a) (omega = w k, set at the
+anchor time t_a from the root body's r x v / |r|^2: at the start, for the relative equilibria of
+``orbit.motion``, exactly the rigid rotation).  An orbit that decays speeds up (the de-orbit ends
+19 % faster than it starts), so the driver (tetherlab.pipeline) re-anchors the frame every few
+orbits: the state is turned back to inertial components at t_a and the run restarts there.  Every 3-vector of q_trans (root positions and rod vectors d_i) is stored
 in the frame's components, q_in = R q, and its rate as the frame-relative rate v = q' with
 q_in' = R (v + omega x q).  Then (a the inertial acceleration of the same vector, in the frame's
 components)
@@ -25,8 +27,8 @@ matrix (tether/newton.py) and the event functions (kernel/events.py: |r0| and th
 apply to the frame's state unchanged.  The Coriolis and centrifugal terms (order Omega, Omega^2)
 are not stiff and are left out of the Newton matrix.
 
-Parameter block (appended to the model's p, header H_OFF_FORM): OP_W (3) omega in rad/s, then
-scratch for the inertial state and its derivative (2 x H_NSTATE).
+Parameter block (appended to the model's p, header H_OFF_FORM): OP_W (3) omega in rad/s, OP_T0 the
+anchor time t_a, then scratch for the inertial state and its derivative (2 x H_NSTATE).
 """
 
 from __future__ import annotations
@@ -41,10 +43,11 @@ from ..kernel.layout import FORM_COWELL_ORBIT, H_FORM, H_LEN, H_NQT, H_NSTATE, H
 from ..tether.chain import system_accelerations
 
 OP_W = 0
-OP_SCR = 3
+OP_T0 = 3
+OP_SCR = 4
 
 
-def attach(p: np.ndarray, omega_rad_s: np.ndarray) -> np.ndarray:
+def attach(p: np.ndarray, omega_rad_s: np.ndarray, t_anchor_s: float = 0.0) -> np.ndarray:
     """A copy of the model's parameter block with the frame block appended (header H_OFF_FORM)."""
     omega = np.asarray(omega_rad_s, dtype=float).reshape(3)
     if not (np.all(np.isfinite(omega)) and float(omega @ omega) > 0.0):
@@ -52,6 +55,7 @@ def attach(p: np.ndarray, omega_rad_s: np.ndarray) -> np.ndarray:
     n = int(p[H_NSTATE])
     block = np.zeros(OP_SCR + 2 * n)
     block[OP_W : OP_W + 3] = omega
+    block[OP_T0] = t_anchor_s
     off = p.size
     out = np.concatenate([p, block])
     out[H_LEN] = out.size
@@ -87,8 +91,8 @@ def cowell_orbit_rhs(t, y_ptr, dy_ptr, p_ptr):
     kx = wx / w
     ky = wy / w
     kz = wz / w
-    c = math.cos(w * t)
-    s = math.sin(w * t)
+    c = math.cos(w * (t - p[off + OP_T0]))
+    s = math.sin(w * (t - p[off + OP_T0]))
     yi = p[off + OP_SCR : off + OP_SCR + n]
     ai = p[off + OP_SCR + n : off + OP_SCR + 2 * n]
     for j in range(h // 3):
@@ -128,7 +132,8 @@ def cowell_orbit_rhs(t, y_ptr, dy_ptr, p_ptr):
 
 
 def _rotation_matrices(t: np.ndarray, omega: np.ndarray) -> np.ndarray:
-    """R(t) for every time (shape (m, 3, 3)): the frame's components to inertial ones."""
+    """R(t) for every time since the anchor (shape (m, 3, 3)): the frame's components to inertial
+    ones."""
     w = float(np.linalg.norm(omega))
     k = omega / w
     K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
@@ -139,7 +144,8 @@ def _rotation_matrices(t: np.ndarray, omega: np.ndarray) -> np.ndarray:
 
 
 def to_inertial(t, Y, omega_rad_s, n_qt: int) -> np.ndarray:
-    """Cowell states [q, q_in'] (rows) from frame states [q, v] at the times ``t``."""
+    """Cowell states [q, q_in'] (rows) from frame states [q, v] at the times ``t`` since the
+    anchor."""
     omega = np.asarray(omega_rad_s, dtype=float)
     Y = np.atleast_2d(np.asarray(Y, dtype=float))
     R = _rotation_matrices(t, omega)
@@ -153,7 +159,7 @@ def to_inertial(t, Y, omega_rad_s, n_qt: int) -> np.ndarray:
 
 
 def to_frame(t: float, y, omega_rad_s, n_qt: int) -> np.ndarray:
-    """The frame state [q, v] of one Cowell state y at the time t."""
+    """The frame state [q, v] of one Cowell state y at the time t since the anchor."""
     omega = np.asarray(omega_rad_s, dtype=float)
     y = np.asarray(y, dtype=float)
     R = _rotation_matrices(t, omega)[0]
