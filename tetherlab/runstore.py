@@ -73,7 +73,7 @@ class Interrupted(Exception):
             text = (f"interrupted at t = {t:.9g} s of {t_end:.9g} s; {rows} output rows saved in {out_dir}/. "
                     f"Continue with: tetherlab run --resume {out_dir}")  # fmt: skip
         else:
-            text = (f"interrupted; this run (DROMO formulation or a scipy method) keeps no checkpoints, "
+            text = (f"interrupted; this run (DROMO, cowell-orbit or a scipy method) keeps no checkpoints, "
                     f"nothing was saved in {out_dir}/: run it again (the Cowell formulation with dop853, "
                     f"vern9 or radau5 can be resumed)")  # fmt: skip
         super().__init__(text)
