@@ -147,3 +147,187 @@ def test_fallback_names_the_reason():
     with pytest.raises(ValueError, match="newton"):
         integrate("radau5", cowell_rhs, 0.0, y0, np.array([0.0, 1.0]), model.fresh_params(),
                   1e-6, 1e-6, second_order=False, newton="structured")  # fmt: skip
+
+
+# --------------------------------------------------------------------------------------------
+# Trees of point masses (a tether hanging from another tether's tip body): leaves-first
+# elimination with the children's Schur terms collected at their parent's joint.
+# --------------------------------------------------------------------------------------------
+
+TREE = """
+name = "tree"
+duration = "300 s"
+[effects]
+central_gravity = {}
+[bodies.hub]
+mass = "500 kg"
+[bodies.mid]
+mass = "80 kg"
+[bodies.a]
+mass = "30 kg"
+[bodies.b]
+mass = "20 kg"
+[tethers.t1]
+from = "hub"
+to = "mid"
+rods = 3
+length = "1 km"
+EA = "3e4 N"
+mass = "5 kg"
+damping = "%s"
+[tethers.t1.initial]
+theta = "10 deg"
+[tethers.t2]
+from = "mid"
+to = "a"
+rods = 4
+length = "600 m"
+EA = "2e4 N"
+mass = "3 kg"
+[tethers.t2.initial]
+theta = "25 deg"
+[tethers.t3]
+from = "mid"
+to = "b"
+rods = 2
+length = "400 m"
+EA = "2e4 N"
+mass = "2 kg"
+[tethers.t3.initial]
+theta = "-20 deg"
+phi = "30 deg"
+[tethers.t4]
+from = "hub"
+to = "c"
+rods = 3
+length = "500 m"
+EA = "1e4 N"
+mass = "2 kg"
+[tethers.t4.initial]
+theta = "-15 deg"
+[bodies.c]
+mass = "10 kg"
+[orbit]
+reference = "center_of_mass"
+elements = { a = "7000 km", e = 0.0, i = "50 deg" }
+motion = "corotating"
+[integrator]
+method = "radau5"
+rtol = 1e-8
+atol = 1e-8
+[output]
+step = "30 s"
+"""
+
+
+def _tree(tmp_path, damping="0 N s"):
+    from tetherlab.pipeline import prepare
+    from tetherlab.scene import load_scene
+
+    f = tmp_path / "tree.toml"
+    f.write_text(TREE % damping)
+    return prepare(load_scene(f))
+
+
+def _dense_A_tree(p, blk, m1):
+    """A_q, A_v of the structured matrix for any star or tree of point masses, assembled densely
+    from the parameter block's tether table (independent of newton.factor/solve)."""
+    from tetherlab.kernel import layout as L
+
+    offt = int(p[L.H_OFF_TETH])
+    nteth = int(p[L.H_NTETH])
+    fixed = not p[L.H_ROOT_INV_M] > 0
+
+    def joint_of_body(body):
+        if body == 0:
+            return 0
+        tb = offt + (body - 1) * L.TT_SIZE
+        return 3 + 3 * (int(p[tb + L.TT_ROD0]) + int(p[tb + L.TT_NRODS]) - 1)
+
+    T = np.zeros((m1, m1))
+    T[:3, :3] = np.eye(3)
+    M = np.zeros((m1, m1))
+    K = np.zeros((m1, m1))
+    C = np.zeros((m1, m1))
+    M[:3, :3] = np.eye(3) * (1.0 if fixed else p[L.H_ROOT_M])
+    depth = {0: 0}
+    order = []
+    while len(order) < nteth:  # parents before children, for T
+        for k in range(nteth):
+            par = int(p[offt + k * L.TT_SIZE + L.TT_PARENT])
+            if k not in order and par in depth:
+                order.append(k)
+                depth[1 + k] = depth[par] + 1
+    for k in order:
+        tb = offt + k * L.TT_SIZE
+        n, g0 = int(p[tb + L.TT_NRODS]), int(p[tb + L.TT_ROD0])
+        pa = joint_of_body(int(p[tb + L.TT_PARENT]))
+        for i in range(n):
+            g = g0 + i
+            oa, ob = (pa if i == 0 else 3 * g), 3 + 3 * g
+            T[ob : ob + 3] = T[oa : oa + 3]
+            T[ob : ob + 3, ob : ob + 3] += 2 * SQ3 * np.eye(3)
+            b = blk[g]
+            maa, mab, kel, kv = (b[9 * j : 9 * j + 9].reshape(3, 3) for j in range(4))
+            for o, sg, diag, off in ((oa, 1.0, (oa, maa), (ob, mab)), (ob, -1.0, (ob, maa), (oa, mab))):
+                if o == 0 and fixed:
+                    continue
+                M[o : o + 3, diag[0] : diag[0] + 3] += diag[1]
+                M[o : o + 3, off[0] : off[0] + 3] += off[1]
+                K[o : o + 3, oa : oa + 3] -= sg * kel
+                K[o : o + 3, ob : ob + 3] += sg * kel
+                C[o : o + 3, oa : oa + 3] -= sg * kv
+                C[o : o + 3, ob : ob + 3] += sg * kv
+            if i == n - 1:
+                M[ob : ob + 3, ob : ob + 3] += p[tb + L.TT_TIP_M] * np.eye(3)
+    Ti = np.linalg.inv(T)
+    return Ti @ np.linalg.solve(M, K) @ T, Ti @ np.linalg.solve(M, C) @ T
+
+
+def test_dense_assembly_of_a_tree_reduces_to_the_star_one():
+    # the tree assembly above, on the star of _model, is the star assembly: it is a fair oracle
+    model, y = _model("paper", True, False)
+    p = model.fresh_params()
+    m1 = y.size // 2
+    blk, _, _ = nw.workspace(p)
+    nw.rod_blocks(y, p, m1, blk)
+    for a, b in zip(_dense_A(model, blk, m1), _dense_A_tree(p, blk, m1)):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * np.max(np.abs(a)))
+
+
+@pytest.mark.parametrize("damping", ["0 N s", "500 N s"])
+def test_structured_solve_of_a_tree_equals_dense_lu(tmp_path, damping):
+    prep = _tree(tmp_path, damping)
+    p = prep.model.fresh_params()
+    y = prep.y0.copy()
+    y[y.size // 2 :] += np.random.default_rng(5).normal(size=y.size // 2) * 0.01
+    assert nw.structure_supported(p, y.size, True) == ""
+    m1 = y.size // 2
+    blk, f1, f2 = nw.workspace(p)
+    assert nw.rod_blocks(y, p, m1, blk) == 0
+    aq, av = _dense_A_tree(p, blk, m1)
+    rng = np.random.default_rng(11)
+    for g, fac in ((3.6378342527444962 / 0.5, f1), (complex(2.6810828736277523, 3.0504301992474105) / 0.5, f2)):
+        assert nw.factor(p, blk, g, fac) == 0
+        E = g * np.eye(2 * m1) - np.block([[np.zeros((m1, m1)), np.eye(m1)], [aq, av]])
+        b = rng.normal(size=2 * m1) * (1.0 if fac is f1 else 1.0 + 0.5j)
+        x = b.astype(fac.dtype)
+        nw.solve(p, blk, g, fac, m1, x)
+        xd = np.linalg.solve(E, b)
+        # as for the star: round-off of a matrix with cond ~ 1e3-1e4
+        assert np.max(np.abs(x - xd)) <= 1e-11 * np.max(np.abs(xd))
+
+
+def test_structured_and_dense_runs_of_a_tree_agree(tmp_path):
+    prep = _tree(tmp_path)
+    out = {}
+    for kind in ("structured", "dense"):
+        res = integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, prep.model.fresh_params(), 1e-8,
+                        prep.atol, second_order=True, newton=kind)  # fmt: skip
+        assert res.success, res.message
+        out[kind] = res
+    assert out["structured"].stats["newton_matrix"] == "structured"
+    m1 = prep.y0.size // 2
+    # rod vectors of both runs within 100 tolerance units of the longest (333 m) rods, as above
+    qa, qb = out["structured"].y[:, 3:m1], out["dense"].y[:, 3:m1]
+    assert np.max(np.abs(qa - qb)) * 2 * SQ3 <= 100 * 1e-8 * 1000.0 / 3

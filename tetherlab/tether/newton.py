@@ -42,7 +42,7 @@ from ..kernel.layout import (
     H_NRIGID,
     H_NROOT,
     H_NTETH,
-    H_OFF_BODY,
+    H_OFF_ORDER,
     H_OFF_ROD,
     H_OFF_TETH,
     H_ROOT_INV_M,
@@ -59,6 +59,8 @@ from ..kernel.layout import (
     BT_SIZE,
     TT_MODEL,
     TT_PARENT,
+    TT_CHILD,
+    TT_PA,
     TT_NRODS,
     TT_ROD0,
     TT_SIZE,
@@ -89,16 +91,24 @@ def structure_supported(p, n_state, second_order):
                 f"2*(3 + 3*{nrods}) = {expect} (components the structured solver does not know)")
     if nrods < 1:
         return "no rods"
-    # The blocks below are those of a star: every tether hangs from body 0 (the only root) and ends
-    # on a point mass or a free end.  Trees and rigid bodies (issue 10) take the dense path until
-    # their blocks are eliminated here too (the same leaves-first order as chain.py).
+    # Stars and trees of point masses with one root: each tether hangs from the root body or from
+    # the tip body of another tether, and the elimination runs leaves first (the tether order of
+    # chain.py).  Rigid bodies (6x6 blocks and first-order attitude states) and forests of several
+    # roots take the dense path.
     if int(p[H_NROOT]) != 1 or int(p[H_NRIGID]) != 0:
-        return f"{int(p[H_NROOT])} root bodies and {int(p[H_NRIGID])} rigid bodies (the structured blocks are a star's)"
+        return (f"{int(p[H_NROOT])} root bodies and {int(p[H_NRIGID])} rigid bodies (the structured blocks "
+                "are those of point masses under one root)")  # fmt: skip
     offt = int(p[H_OFF_TETH])
-    offb = int(p[H_OFF_BODY])
-    for k in range(int(p[H_NTETH])):
-        if int(p[offt + k * TT_SIZE + TT_PARENT]) != 0 or int(p[offb + (1 + k) * BT_SIZE + BT_NCHILD]) != 0:
-            return "a tree of tethers (the structured blocks are a star's)"
+    nteth = int(p[H_NTETH])
+    for k in range(nteth):
+        tb = offt + k * TT_SIZE
+        parent = int(p[tb + TT_PARENT])
+        if parent < 0 or parent > nteth:
+            return f"tether {k} hangs from body {parent}, neither the root nor a tether's tip"
+        if parent > 0 and int(p[offt + (parent - 1) * TT_SIZE + TT_CHILD]) != parent:
+            return f"tether {k} hangs from body {parent}, which is not a point mass at a tether's tip"
+        if any(p[tb + TT_PA + c] != 0.0 for c in range(3)):
+            return f"tether {k} is attached off its parent's centre (a rigid body's attachment point)"
     return ""
 
 
@@ -207,23 +217,27 @@ def rod_blocks(y, p, m1, blk):
 def factor(p, blk, g, fac):
     """Block-Thomas factorisation of N = g M_x - C_x - K_x/g (g real or complex) into ``fac``.
 
-    Per tether, from the tip joint to the first: S_n = P_n + g mf I, S_j = P_j + P_{j+1} -
+    Tethers leaves first (p[H_OFF_ORDER]); per tether from the tip joint to the first: S_n = P_n +
+    g mf I + (the Schur terms of the tethers hanging from the tip body), S_j = P_j + P_{j+1} -
     Q_{j+1} S_{j+1}^-1 Q_{j+1}, with the rod blocks P = g MAA + KV + KEL/g, Q = g MAB - KV - KEL/g;
-    the root gets S_0 = g m0 I + sum over tethers (P_1 - Q_1 S_1^-1 Q_1).  Returns 0 or 1 for a
-    singular block.
+    each tether's first rod adds P_1 - Q_1 S_1^-1 Q_1 to its parent body's joint, and the root gets
+    S_0 = g m0 I + those of its tethers.  Returns 0 or 1 for a singular block.
     """
     nteth = int(p[H_NTETH])
     offt = int(p[H_OFF_TETH])
+    offo = int(p[H_OFF_ORDER])
     nrods = int(p[H_NRODS])
     free_root = p[H_ROOT_INV_M] > 0.0
     m0 = p[H_ROOT_M]
     ginv = 1.0 / g
     s = np.zeros(9, dtype=fac.dtype)
     tmp = np.zeros(9, dtype=fac.dtype)
-    root = np.zeros(9, dtype=fac.dtype)
+    # Schur terms collected at each body's joint: row 0 the root, row 1 + k the tip of tether k
+    acc = np.zeros((nteth + 1, 9), dtype=fac.dtype)
     for a in range(3):
-        root[4 * a] = g * m0 if free_root else g
-    for k in range(nteth):
+        acc[0, 4 * a] = g * m0 if free_root else g
+    for j in range(nteth):
+        k = int(p[offo + j])
         tb = offt + k * TT_SIZE
         n = int(p[tb + TT_NRODS])
         g0 = int(p[tb + TT_ROD0])
@@ -242,6 +256,8 @@ def factor(p, blk, g, fac):
                 if mf > 0.0:
                     for a in range(3):
                         s[4 * a] += g * mf
+                for c in range(9):
+                    s[c] += acc[1 + k, c]
             else:
                 bn = blk[gr + 1]
                 fn = fac[gr + 1]
@@ -253,17 +269,30 @@ def factor(p, blk, g, fac):
                 return 1
             for c in range(9):
                 f[F_SINV + c] = tmp[c]
-        if free_root:
+        parent = int(p[tb + TT_PARENT])
+        if parent > 0 or free_root:
             b = blk[g0]
+            row = acc[parent]
             for c in range(9):
-                root[c] += g * b[B_MAA + c] + b[B_KV + c] + b[B_KEL + c] * ginv
-            _sub_qsq(root, fac[g0], tmp)
-    det = _inv3(root, tmp)
+                row[c] += g * b[B_MAA + c] + b[B_KV + c] + b[B_KEL + c] * ginv
+            _sub_qsq(row, fac[g0], tmp)
+    det = _inv3(acc[0], tmp)
     if det == 0.0 or not np.isfinite(abs(det)):
         return 1
     for c in range(9):
         fac[nrods, F_SINV + c] = tmp[c]
     return 0
+
+
+@njit(cache=True)
+def _parent_joint(p, offt, k):
+    """Offset in joint coordinates of the joint tether k hangs from: 0 for the root, else the last
+    joint of the tether whose tip body is its parent."""
+    parent = int(p[offt + k * TT_SIZE + TT_PARENT])
+    if parent == 0:
+        return 0
+    tp = offt + (parent - 1) * TT_SIZE
+    return 3 + 3 * (int(p[tp + TT_ROD0]) + int(p[tp + TT_NRODS]) - 1)
 
 
 @njit(cache=True)
@@ -292,6 +321,7 @@ def solve(p, blk, g, fac, m1, b):
     """
     nteth = int(p[H_NTETH])
     offt = int(p[H_OFF_TETH])
+    offo = int(p[H_OFF_ORDER])
     nrods = int(p[H_NRODS])
     free_root = p[H_ROOT_INV_M] > 0.0
     m0 = p[H_ROOT_M]
@@ -299,22 +329,23 @@ def solve(p, blk, g, fac, m1, b):
     xv = np.empty(m1, dtype=b.dtype)  # T b_v, then the right-hand side s, then w
     xq = np.empty(m1, dtype=b.dtype)  # T b_q
     s = np.zeros(m1, dtype=b.dtype)
-    # joint coordinates: x_root = r0, x_B = x_A + 2 sqrt3 d (per tether)
+    # joint coordinates, parents before children: x_root = r0, x_B = x_A + 2 sqrt3 d
     for c in range(3):
         xv[c] = b[m1 + c]
         xq[c] = b[c]
-    for k in range(nteth):
+    for j in range(nteth - 1, -1, -1):
+        k = int(p[offo + j])
         tb = offt + k * TT_SIZE
         n = int(p[tb + TT_NRODS])
         g0 = int(p[tb + TT_ROD0])
+        pa = _parent_joint(p, offt, k)
         for i in range(n):
             gr = g0 + i
             o = 3 + 3 * gr
+            oa = pa if i == 0 else o - 3
             for c in range(3):
-                av = xv[c] if i == 0 else xv[o - 3 + c]
-                aq = xq[c] if i == 0 else xq[o - 3 + c]
-                xv[o + c] = av + 2.0 * SQ3 * b[m1 + o + c]
-                xq[o + c] = aq + 2.0 * SQ3 * b[o + c]
+                xv[o + c] = xv[oa + c] + 2.0 * SQ3 * b[m1 + o + c]
+                xq[o + c] = xq[oa + c] + 2.0 * SQ3 * b[o + c]
     # s = M_x xv + K_x xq / g, assembled rod by rod (root row: m0 xv, or xv itself when fixed)
     for c in range(3):
         s[c] = m0 * xv[c] if free_root else xv[c]
@@ -323,10 +354,11 @@ def solve(p, blk, g, fac, m1, b):
         n = int(p[tb + TT_NRODS])
         g0 = int(p[tb + TT_ROD0])
         mf = p[tb + TT_TIP_M]
+        pa = _parent_joint(p, offt, k)
         for i in range(n):
             gr = g0 + i
             bl = blk[gr]
-            oa = 0 if i == 0 else 3 * gr  # joint A of rod gr
+            oa = pa if i == 0 else 3 * gr  # joint A of rod gr
             ob = 3 + 3 * gr
             for a in range(3):
                 ma = 0.0 * s[0]
@@ -336,37 +368,39 @@ def solve(p, blk, g, fac, m1, b):
                     ma += bl[B_MAA + 3 * a + c] * xv[oa + c] + bl[B_MAB + 3 * a + c] * xv[ob + c]
                     mb += bl[B_MAB + 3 * a + c] * xv[oa + c] + bl[B_MAA + 3 * a + c] * xv[ob + c]
                     ke += bl[B_KEL + 3 * a + c] * (xq[ob + c] - xq[oa + c])
-                if i > 0 or free_root:
+                if oa > 0 or free_root:
                     s[oa + a] += ma + ke * ginv
                 s[ob + a] += mb - ke * ginv
             if i == n - 1 and mf > 0.0:
                 for a in range(3):
                     s[ob + a] += mf * xv[ob + a]
-    # forward elimination of the right-hand side (tip -> root), then the root
-    y0 = np.zeros(3, dtype=b.dtype)
-    for c in range(3):
-        y0[c] = s[c]
-    for k in range(nteth):
+    # forward elimination of the right-hand side, leaves first (tip -> parent joint)
+    for j in range(nteth):
+        k = int(p[offo + j])
         tb = offt + k * TT_SIZE
         n = int(p[tb + TT_NRODS])
         g0 = int(p[tb + TT_ROD0])
         for i in range(n - 2, -1, -1):
             gr = g0 + i
             _sub_q_sinv_y(s, 3 + 3 * gr, fac[gr + 1], s, 3 + 3 * (gr + 1))
-        if free_root:
-            _sub_q_sinv_y(y0, 0, fac[g0], s, 3 + 3 * g0)
+        pa = _parent_joint(p, offt, k)
+        if pa > 0 or free_root:
+            _sub_q_sinv_y(s, pa, fac[g0], s, 3 + 3 * g0)
     fr = fac[nrods]
+    y0 = (s[0], s[1], s[2])
     for a in range(3):
         xv[a] = fr[3 * a] * y0[0] + fr[3 * a + 1] * y0[1] + fr[3 * a + 2] * y0[2]
-    # back substitution: w_j = S_j^-1 (y_j - Q_j w_{j-1})
-    for k in range(nteth):
+    # back substitution, parents before children: w_j = S_j^-1 (y_j - Q_j w_{j-1})
+    for j in range(nteth - 1, -1, -1):
+        k = int(p[offo + j])
         tb = offt + k * TT_SIZE
         n = int(p[tb + TT_NRODS])
         g0 = int(p[tb + TT_ROD0])
+        pa = _parent_joint(p, offt, k)
         for i in range(n):
             gr = g0 + i
             f = fac[gr]
-            oa = 0 if i == 0 else 3 * gr
+            oa = pa if i == 0 else 3 * gr
             ob = 3 + 3 * gr
             e = (s[ob] - (f[F_Q] * xv[oa] + f[F_Q + 1] * xv[oa + 1] + f[F_Q + 2] * xv[oa + 2]),
                  s[ob + 1] - (f[F_Q + 3] * xv[oa] + f[F_Q + 4] * xv[oa + 1] + f[F_Q + 5] * xv[oa + 2]),
@@ -380,9 +414,10 @@ def solve(p, blk, g, fac, m1, b):
         tb = offt + k * TT_SIZE
         n = int(p[tb + TT_NRODS])
         g0 = int(p[tb + TT_ROD0])
+        pa = _parent_joint(p, offt, k)
         for i in range(n):
             gr = g0 + i
-            oa = 0 if i == 0 else 3 * gr
+            oa = pa if i == 0 else 3 * gr
             ob = 3 + 3 * gr
             for c in range(3):
                 b[m1 + ob + c] = (xv[ob + c] - xv[oa + c]) / (2.0 * SQ3)
