@@ -157,7 +157,7 @@ def heyoka_rows(tols=HEYOKA_TOLS, repeats: int = 1, case: str = "ex2") -> list[d
         wall, r, stats = timed(run_once, repeats)
         rows.append({"who": "heyoka double", "tol": tol, "run": run_once,
                      "error_m": float(np.linalg.norm(r - ref)), "wall_s": wall,
-                     "steps": stats["n_accepted"]})  # fmt: skip
+                     "steps": stats["n_accepted"], "order": int(ta.order)})  # fmt: skip
     return rows
 
 

@@ -92,6 +92,17 @@ def sigma_rates(c, sn, y, fr, ft, fn, dy):
     """d/dsigma of [tau, q1, q2, q3, eta1..eta4] into dy[0:8], for the non-dimensional
     perturbation (fr, ft, fn) in the orbital frame (sheet s5; docs/dromo.md section 3);
     c, sn = cos sigma, sin sigma."""
+    q3 = y[3]
+    s = 1.0 + y[1] * c + y[2] * sn
+    den = q3 * q3 * q3 * s * s * q3 * s  # q3^4 s^3
+    _scaled_rates(c, sn, y, fr / den, ft / den, fn / den, dy)
+
+
+@njit(cache=True)
+def _scaled_rates(c, sn, y, ax, ay, az, dy):
+    """:func:`sigma_rates` from the perturbation already divided by q3^4 s^3 (ax = fr / (q3^4
+    s^3), ...): the sigma form folds that factor into one multiplier computed from the
+    elements alone, off the path from the force to the rates (:func:`dromo_sigma_rhs`)."""
     q1 = y[1]
     q2 = y[2]
     q3 = y[3]
@@ -101,10 +112,6 @@ def sigma_rates(c, sn, y, fr, ft, fn, dy):
     e4 = y[7]
     s = 1.0 + q1 * c + q2 * sn
     q3s = q3 * q3 * q3 * s * s
-    den = q3s * q3 * s  # q3^4 s^3
-    ax = fr / den
-    ay = ft / den
-    az = fn / den
     dy[0] = 1.0 / q3s
     dy[1] = s * sn * ax + (q1 + (1.0 + s) * c) * ay
     dy[2] = -s * c * ax + (q2 + (1.0 + s) * sn) * ay
@@ -159,10 +166,18 @@ def dromo_sigma_rhs(sigma, y_ptr, dy_ptr, p_ptr):
     T = p[off + FP_T]
     rx, ry, rz, vx, vy, vz, ix, iy, iz, jx, jy, jz, kx, ky, kz, c, sn = root_state(sigma, y, L, T)
     m0 = p[H_ROOT_M]
+    # One multiplier k = (L^2/mu) / (m0 q3^4 s^3) takes the force (N) to the scaled rates'
+    # inputs fr/(q3^4 s^3), ...: it depends on the elements only, so its division runs beside the
+    # force evaluation instead of two divisions (by m0, by q3^4 s^3) after it on the rhs's
+    # critical path (docs/integrators.md section 8: ~10 % of the rhs latency; the rates change
+    # by rounding only).
+    q3 = y[3]
+    s = 1.0 + y[1] * c + y[2] * sn
+    k = (L * L / mu) / (m0 * (q3 * q3 * q3 * s * s * q3 * s))
     # central gravity is the Kepler part DROMO integrates analytically: only the rest is evaluated
     fx, fy, fz = perturbing_body_force(p, T * y[0], 0, rx, ry, rz, vx, vy, vz, m0)
-    _projected_rates(c, sn, y, fx / m0, fy / m0, fz / m0, ix, iy, iz, jx, jy, jz, kx, ky, kz, mu,
-                     L, dy)  # fmt: skip
+    _scaled_rates(c, sn, y, (fx * ix + fy * iy + fz * iz) * k, (fx * jx + fy * jy + fz * jz) * k,
+                  (fx * kx + fy * ky + fz * kz) * k, dy)  # fmt: skip
     return 0
 
 
