@@ -31,6 +31,7 @@ import numpy as np
 from numba import carray
 
 from .._jit import njit, rhs_cfunc
+from ..kernel import effects as _effects
 from ..kernel.effects import perturbing_body_force
 from ..kernel.layout import (
     FORM_DROMO_SIGMA,
@@ -55,7 +56,14 @@ TWO_PI = 2.0 * math.pi
 # ------------------------------------------------------------------------------------------------
 # compiled kernels
 # ------------------------------------------------------------------------------------------------
-@njit(cache=True)
+#: The effect sum of :func:`tetherlab.kernel.effects.perturbing_body_force` (the same Python
+#: function, not a copy) compiled to be inlined into the sigma-form rhs at numba-IR level: as a
+#: separate compiled function it is a call with eleven arguments and a tuple returned through
+#: memory, on the rhs's critical path (docs/integrators.md section 8, constant factors).
+#: Without cache=True: this instance never runs on its own, it is compiled into the cached cfunc.
+_body_force_inlined = njit(inline="always")(_effects._body_force.py_func)
+
+@njit(cache=True, inline="always")
 def geometry(sigma, y):
     """s, kappa and the orbital-frame unit vectors i, j, k from (sigma, y[1:8]) (sheet s1, s2)."""
     q1 = y[1]
@@ -98,7 +106,7 @@ def sigma_rates(c, sn, y, fr, ft, fn, dy):
     _scaled_rates(c, sn, y, fr / den, ft / den, fn / den, dy)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _scaled_rates(c, sn, y, ax, ay, az, dy):
     """:func:`sigma_rates` from the perturbation already divided by q3^4 s^3 (ax = fr / (q3^4
     s^3), ...): the sigma form folds that factor into one multiplier computed from the
@@ -123,7 +131,7 @@ def _scaled_rates(c, sn, y, ax, ay, az, dy):
     dy[7] = h * (-e1 * c - e2 * sn)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def root_state(sigma, y, L, T):
     """Inertial position (m) and velocity (m/s) of the orbit, and the frame (sheet s7)."""
     c, sn, s, kap, ix, iy, iz, jx, jy, jz, kx, ky, kz = geometry(sigma, y)
@@ -175,7 +183,7 @@ def dromo_sigma_rhs(sigma, y_ptr, dy_ptr, p_ptr):
     s = 1.0 + y[1] * c + y[2] * sn
     k = (L * L / mu) / (m0 * (q3 * q3 * q3 * s * s * q3 * s))
     # central gravity is the Kepler part DROMO integrates analytically: only the rest is evaluated
-    fx, fy, fz = perturbing_body_force(p, T * y[0], 0, rx, ry, rz, vx, vy, vz, m0)
+    fx, fy, fz = _body_force_inlined(p, T * y[0], 0, rx, ry, rz, vx, vy, vz, m0, False)
     _scaled_rates(c, sn, y, (fx * ix + fy * iy + fz * iz) * k, (fx * jx + fy * jy + fz * jz) * k,
                   (fx * kx + fy * ky + fz * kz) * k, dy)  # fmt: skip
     return 0
