@@ -3,9 +3,10 @@ per right-hand-side call, per step and per Taylor order (issue 12; docs/integrat
 
 For each case (Example 2, J2 + Moon; Example 1, J2 only) and target final error (1 m, 1 mm), the
 loosest tolerance of the bench grid (:data:`.stiefel.TOLS`, :data:`.stiefel.HEYOKA_TOLS`) that
-reaches the target is taken for each side, as ``--only stiefel`` does, and the two runs and the
-probes below are timed in one round robin (minimum of ``repeats`` each, so all minima come from
-the same machine state; the machine has 2 shared cores).  Beside the wall times:
+reaches the target is taken for each side, as ``--only stiefel`` does, and the two runs are timed
+alternately, then the probes below alternately right after (minimum of ``repeats`` each; the
+machine has 2 shared cores, so absolute times move with its load: compare within a row).
+Beside the wall times:
 
 * ``rhs_ns``: one evaluation of the DROMO sigma right-hand side (:func:`dromo_sigma_rhs`) with
   the scene's effects, measured as a *dependent chain* (each call's input is built from the
@@ -131,9 +132,11 @@ def run(case: str = "ex2", repeats: int = 21) -> list[dict]:
         def run_tl():
             kern.append(a["run"]()[1]["wall_s"])
 
-        # everything timed in one round robin, so the minima come from the same machine state
-        (w_tl, w_hy, w_rhs, w_v9, w_triv), _ = S._round_robin([run_tl, b["run"], rhs_probe, v9_probe, triv_probe],
-                                                              repeats)  # fmt: skip
+        # the two runs alternately (as --only stiefel), then the probes alternately, right after:
+        # probes interleaved with the runs evict the runs' caches and predictors (measured: the
+        # glue tripled), so they get their own round robin
+        (w_tl, w_hy), _ = S._round_robin([run_tl, b["run"]], repeats)
+        (w_rhs, w_v9, w_triv), _ = S._round_robin([rhs_probe, v9_probe, triv_probe], repeats)
         k_min = min(kern)
         rhs_ns = w_rhs / n_probe * 1e9
         ovh_ns = (w_v9 - w_triv) / v9_steps * 1e9
