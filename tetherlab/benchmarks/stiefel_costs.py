@@ -135,6 +135,7 @@ def run(case: str = "ex2", repeats: int = 21) -> list[dict]:
         # the two runs alternately (as --only stiefel), then the probes alternately, right after:
         # probes interleaved with the runs evict the runs' caches and predictors (measured: the
         # glue tripled), so they get their own round robin
+        load_before = S._load()
         (w_tl, w_hy), _ = S._round_robin([run_tl, b["run"]], repeats)
         (w_rhs, w_v9, w_triv), _ = S._round_robin([rhs_probe, v9_probe, triv_probe], repeats)
         k_min = min(kern)
@@ -149,6 +150,7 @@ def run(case: str = "ex2", repeats: int = 21) -> list[dict]:
             "hy_wall_ms": w_hy * 1e3, "hy_us_per_step": w_hy / b["steps"] * 1e6,
             "hy_ns_per_step_order": w_hy / (b["steps"] * b["order"]) * 1e9,
             "ratio": w_tl / w_hy, "floor_ratio": a["n_rhs"] * rhs_ns * 1e-9 / w_hy,
+            "load_avg": f"{load_before:.2f} -> {S._load():.2f}",
         })  # fmt: skip
     rows.append({"case": case, "target_m": "trend",
                  "note": f"n_rhs ~ error^-x, x = {_fit([r['n_rhs'] for r in tl], [r['error_m'] for r in tl])}; "
