@@ -330,3 +330,28 @@ def test_sigma_rhs_equals_the_sheet_rates_of_the_projected_perturbation(mass_kg)
                          0.5 * fn / den * (-e2 * c + e1 * sn), 0.5 * fn / den * (-e1 * c - e2 * sn)])  # fmt: skip
         scale = np.array([want[0], *(np.abs([fr, ft, fn]).max() * (2 + abs(q1) + abs(q2)) / den * np.ones(7))])
         assert np.all(np.abs(got - want) <= 1e-13 * np.abs(scale)), (got - want) / scale
+
+
+def test_dromo_to_cartesian_is_the_vector_form_bit_for_bit():
+    """The plain-float dromo_to_cartesian does sheet s7's vector form operation for operation:
+    r = (L/(q3^2 s)) i, v = (L/T)(q3 kappa i + q3 s j), i = c x + s y, j = -s x + c y with x, y
+    the first two columns of frame_from_quaternion (sheet s1) -- so the result is bit-for-bit
+    the vector form's, evaluated here with NumPy."""
+    rng = np.random.default_rng(7)
+    mu, L = 398600.4418e9, 6.9e6
+    T = math.sqrt(L**3 / mu)
+    for _ in range(300):
+        el = dromo.cartesian_to_dromo(rng.normal(size=3) * L, rng.normal(size=3) * 7e3, mu, L,
+                                      rng.uniform(-3.0, 3.0))  # fmt: skip
+        sig = rng.uniform(-10.0, 400.0)
+        R = dromo.frame_from_quaternion(el[3:7])
+        c, sn = math.cos(sig), math.sin(sig)
+        i = c * R[:, 0] + sn * R[:, 1]
+        j = -sn * R[:, 0] + c * R[:, 1]
+        q1, q2, q3 = el[:3]
+        s = 1.0 + q1 * c + q2 * sn
+        kap = q1 * sn - q2 * c
+        r_want = (L / (q3 * q3 * s)) * i
+        v_want = (L / T) * (q3 * kap * i + q3 * s * j)
+        r, v = dromo.dromo_to_cartesian(sig, el, mu, L)
+        assert np.array_equal(r, r_want) and np.array_equal(v, v_want)
