@@ -278,3 +278,80 @@ def test_perturbing_body_force_is_body_force_without_central_gravity():
     kepler = 2.0 * np.array(central_gravity.accel(prep.mu_m3_s2, *x[:3]))
     assert np.allclose(pert + kepler, total, rtol=1e-15, atol=0.0)
     assert np.linalg.norm(pert) < 1e-2 * np.linalg.norm(kepler)  # J2 + Moon: a perturbation
+
+
+@pytest.mark.parametrize("mass_kg", [1.0, 7.3])
+def test_sigma_rhs_equals_the_sheet_rates_of_the_projected_perturbation(mass_kg):
+    """dromo_sigma_rhs folds 1/m0 and 1/(q3^4 s^3) into one multiplier (an operation-order
+    change): its rates must equal sheet s5's, evaluated here in NumPy from the Cartesian
+    perturbing force (perturbing_body_force) projected on the orbital frame [i, j, k] of sheet
+    s2, to rounding (relative 1e-13 of each rate's largest term)."""
+    from numba import njit
+
+    from tetherlab._jit import ptr
+    from tetherlab.kernel.effects import perturbing_body_force
+    from tetherlab.kernel.layout import FORM_DROMO_SIGMA, H_ROOT_M
+    from tetherlab.pipeline import prepare
+
+    prep = prepare(load_scene(SCENES / "stiefel-scheifele.toml"))
+    mu = prep.mu_m3_s2
+    L = float(np.linalg.norm(prep.y0[:3]))
+    T = math.sqrt(L**3 / mu)
+    p = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
+    p[H_ROOT_M] = mass_kg
+
+    @njit
+    def call(z, sig, p):
+        dz = np.empty(8)
+        dromo.dromo_sigma_rhs(sig, ptr(z), ptr(dz), ptr(p))
+        return dz
+
+    rng = np.random.default_rng(12)
+    for _ in range(20):
+        sig = rng.uniform(0.0, 300.0)
+        el = dromo.cartesian_to_dromo(prep.y0[:3] * rng.uniform(0.9, 1.1), prep.y0[3:6] * rng.uniform(0.95, 1.0),
+                                      mu, L, rng.uniform(-3, 3))  # fmt: skip
+        z = np.concatenate([[rng.uniform(0.0, 3e4)], el])
+        got = call(z, sig, p)
+        # sheet s7 / s2: position, velocity and the orbital frame
+        r, v = dromo.dromo_to_cartesian(sig, el, mu, L)
+        i_hat = r / np.linalg.norm(r)
+        k_hat = np.cross(r, v) / np.linalg.norm(np.cross(r, v))
+        j_hat = np.cross(k_hat, i_hat)
+        f = np.array(perturbing_body_force(p, T * z[0], 0, *r, *v, mass_kg)) / mass_kg * (L * L / mu)
+        fr, ft, fn = f @ i_hat, f @ j_hat, f @ k_hat
+        q1, q2, q3, e1, e2, e3, e4 = el
+        c, sn = math.cos(sig), math.sin(sig)
+        s = 1 + q1 * c + q2 * sn
+        den = q3**4 * s**3
+        want = np.array([1 / (q3**3 * s * s), (s * sn * fr + (q1 + (1 + s) * c) * ft) / den,
+                         (-s * c * fr + (q2 + (1 + s) * sn) * ft) / den, -q3 * ft / den,
+                         0.5 * fn / den * (e4 * c - e3 * sn), 0.5 * fn / den * (e3 * c + e4 * sn),
+                         0.5 * fn / den * (-e2 * c + e1 * sn), 0.5 * fn / den * (-e1 * c - e2 * sn)])  # fmt: skip
+        scale = np.array([want[0], *(np.abs([fr, ft, fn]).max() * (2 + abs(q1) + abs(q2)) / den * np.ones(7))])
+        assert np.all(np.abs(got - want) <= 1e-13 * np.abs(scale)), (got - want) / scale
+
+
+def test_dromo_to_cartesian_is_the_vector_form_bit_for_bit():
+    """The plain-float dromo_to_cartesian does sheet s7's vector form operation for operation:
+    r = (L/(q3^2 s)) i, v = (L/T)(q3 kappa i + q3 s j), i = c x + s y, j = -s x + c y with x, y
+    the first two columns of frame_from_quaternion (sheet s1) -- so the result is bit-for-bit
+    the vector form's, evaluated here with NumPy."""
+    rng = np.random.default_rng(7)
+    mu, L = 398600.4418e9, 6.9e6
+    T = math.sqrt(L**3 / mu)
+    for _ in range(300):
+        el = dromo.cartesian_to_dromo(rng.normal(size=3) * L, rng.normal(size=3) * 7e3, mu, L,
+                                      rng.uniform(-3.0, 3.0))  # fmt: skip
+        sig = rng.uniform(-10.0, 400.0)
+        R = dromo.frame_from_quaternion(el[3:7])
+        c, sn = math.cos(sig), math.sin(sig)
+        i = c * R[:, 0] + sn * R[:, 1]
+        j = -sn * R[:, 0] + c * R[:, 1]
+        q1, q2, q3 = el[:3]
+        s = 1.0 + q1 * c + q2 * sn
+        kap = q1 * sn - q2 * c
+        r_want = (L / (q3 * q3 * s)) * i
+        v_want = (L / T) * (q3 * kap * i + q3 * s * j)
+        r, v = dromo.dromo_to_cartesian(sig, el, mu, L)
+        assert np.array_equal(r, r_want) and np.array_equal(v, v_want)

@@ -157,7 +157,7 @@ def heyoka_rows(tols=HEYOKA_TOLS, repeats: int = 1, case: str = "ex2") -> list[d
         wall, r, stats = timed(run_once, repeats)
         rows.append({"who": "heyoka double", "tol": tol, "run": run_once,
                      "error_m": float(np.linalg.norm(r - ref)), "wall_s": wall,
-                     "steps": stats["n_accepted"]})  # fmt: skip
+                     "steps": stats["n_accepted"], "order": int(ta.order)})  # fmt: skip
     return rows
 
 
@@ -196,6 +196,16 @@ def _round_robin(runs, repeats: int) -> tuple[list[float], list[float]]:
     return [min(w) for w in walls], [statistics.median(w) for w in walls]
 
 
+def _load() -> float:
+    """The 1-minute load average (nan where the platform has none)."""
+    import os
+
+    try:
+        return os.getloadavg()[0]
+    except OSError:
+        return float("nan")
+
+
 def run(repeats: int = 15, case: str = "ex2") -> list[dict]:
     """Rows: per target, the best tetherlab method and heyoka, with the wall-time ratio.
 
@@ -212,6 +222,7 @@ def run(repeats: int = 15, case: str = "ex2") -> list[dict]:
         picks = [p for p in picks if p is not None]
         hpick = _loosest(hk, target)
         contenders = picks + ([hpick] if hpick else [])
+        load_before = _load()
         walls, medians = _round_robin([c["run"] for c in contenders], repeats)
         tw = walls[: len(picks)]
         ib = int(np.argmin(tw)) if picks else None
@@ -237,6 +248,9 @@ def run(repeats: int = 15, case: str = "ex2") -> list[dict]:
             "tetherlab_cost_exponent": cost_exponent(tl, best["who"]) if best else None,
             "heyoka_cost_exponent": cost_exponent(hk, "heyoka double"),
             "ratio_of_medians": (medians[ib] / medians[-1]) if best and hpick else None,
+            # the machine's 1-minute load average before and after the timed runs (2 shared
+            # cores: the ratios are only comparable between runs at similar load)
+            "load_avg": f"{load_before:.2f} -> {_load():.2f}",
             "others": {p["who"]: {"tol": p["tol"], "error_m": p["error_m"], "wall_s": w}
                        for p, w in zip(picks, tw)},
         })  # fmt: skip

@@ -31,6 +31,7 @@ import numpy as np
 from numba import carray
 
 from .._jit import njit, rhs_cfunc
+from ..kernel import effects as _effects
 from ..kernel.effects import perturbing_body_force
 from ..kernel.layout import (
     FORM_DROMO_SIGMA,
@@ -55,7 +56,14 @@ TWO_PI = 2.0 * math.pi
 # ------------------------------------------------------------------------------------------------
 # compiled kernels
 # ------------------------------------------------------------------------------------------------
-@njit(cache=True)
+#: The effect sum of :func:`tetherlab.kernel.effects.perturbing_body_force` (the same Python
+#: function, not a copy) compiled to be inlined into the sigma-form rhs at numba-IR level: as a
+#: separate compiled function it is a call with eleven arguments and a tuple returned through
+#: memory, on the rhs's critical path (docs/integrators.md section 8, constant factors).
+#: Without cache=True: this instance never runs on its own, it is compiled into the cached cfunc.
+_body_force_inlined = njit(inline="always")(_effects._body_force.py_func)
+
+@njit(cache=True, inline="always")
 def geometry(sigma, y):
     """s, kappa and the orbital-frame unit vectors i, j, k from (sigma, y[1:8]) (sheet s1, s2)."""
     q1 = y[1]
@@ -92,6 +100,17 @@ def sigma_rates(c, sn, y, fr, ft, fn, dy):
     """d/dsigma of [tau, q1, q2, q3, eta1..eta4] into dy[0:8], for the non-dimensional
     perturbation (fr, ft, fn) in the orbital frame (sheet s5; docs/dromo.md section 3);
     c, sn = cos sigma, sin sigma."""
+    q3 = y[3]
+    s = 1.0 + y[1] * c + y[2] * sn
+    den = q3 * q3 * q3 * s * s * q3 * s  # q3^4 s^3
+    _scaled_rates(c, sn, y, fr / den, ft / den, fn / den, dy)
+
+
+@njit(cache=True, inline="always")
+def _scaled_rates(c, sn, y, ax, ay, az, dy):
+    """:func:`sigma_rates` from the perturbation already divided by q3^4 s^3 (ax = fr / (q3^4
+    s^3), ...): the sigma form folds that factor into one multiplier computed from the
+    elements alone, off the path from the force to the rates (:func:`dromo_sigma_rhs`)."""
     q1 = y[1]
     q2 = y[2]
     q3 = y[3]
@@ -101,10 +120,6 @@ def sigma_rates(c, sn, y, fr, ft, fn, dy):
     e4 = y[7]
     s = 1.0 + q1 * c + q2 * sn
     q3s = q3 * q3 * q3 * s * s
-    den = q3s * q3 * s  # q3^4 s^3
-    ax = fr / den
-    ay = ft / den
-    az = fn / den
     dy[0] = 1.0 / q3s
     dy[1] = s * sn * ax + (q1 + (1.0 + s) * c) * ay
     dy[2] = -s * c * ax + (q2 + (1.0 + s) * sn) * ay
@@ -116,7 +131,7 @@ def sigma_rates(c, sn, y, fr, ft, fn, dy):
     dy[7] = h * (-e1 * c - e2 * sn)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def root_state(sigma, y, L, T):
     """Inertial position (m) and velocity (m/s) of the orbit, and the frame (sheet s7)."""
     c, sn, s, kap, ix, iy, iz, jx, jy, jz, kx, ky, kz = geometry(sigma, y)
@@ -159,10 +174,18 @@ def dromo_sigma_rhs(sigma, y_ptr, dy_ptr, p_ptr):
     T = p[off + FP_T]
     rx, ry, rz, vx, vy, vz, ix, iy, iz, jx, jy, jz, kx, ky, kz, c, sn = root_state(sigma, y, L, T)
     m0 = p[H_ROOT_M]
+    # One multiplier k = (L^2/mu) / (m0 q3^4 s^3) takes the force (N) to the scaled rates'
+    # inputs fr/(q3^4 s^3), ...: it depends on the elements only, so its division runs beside the
+    # force evaluation instead of two divisions (by m0, by q3^4 s^3) after it on the rhs's
+    # critical path (docs/integrators.md section 8: ~10 % of the rhs latency; the rates change
+    # by rounding only).
+    q3 = y[3]
+    s = 1.0 + y[1] * c + y[2] * sn
+    k = (L * L / mu) / (m0 * (q3 * q3 * q3 * s * s * q3 * s))
     # central gravity is the Kepler part DROMO integrates analytically: only the rest is evaluated
-    fx, fy, fz = perturbing_body_force(p, T * y[0], 0, rx, ry, rz, vx, vy, vz, m0)
-    _projected_rates(c, sn, y, fx / m0, fy / m0, fz / m0, ix, iy, iz, jx, jy, jz, kx, ky, kz, mu,
-                     L, dy)  # fmt: skip
+    fx, fy, fz = _body_force_inlined(p, T * y[0], 0, rx, ry, rz, vx, vy, vz, m0, False)
+    _scaled_rates(c, sn, y, (fx * ix + fy * iy + fz * iz) * k, (fx * jx + fy * jy + fz * jz) * k,
+                  (fx * kx + fy * ky + fz * kz) * k, dy)  # fmt: skip
     return 0
 
 
@@ -249,29 +272,32 @@ def units(mu_m3_s2: float, length_m: float) -> tuple[float, float]:
     return float(length_m), math.sqrt(length_m**3 / mu_m3_s2)
 
 
-def quaternion_from_frame(R: np.ndarray) -> np.ndarray:
+def quaternion_from_frame(R) -> np.ndarray:
     """Euler parameters (eta1, eta2, eta3, eta4) of the rotation whose columns are x, y, k
     (the convention of sheet s1), by Shepperd's method: divide by the largest component, so no
-    geometry (retrograde equatorial included) divides by zero (sheet s4 step 4)."""
-    tr = R[0, 0] + R[1, 1] + R[2, 2]
-    cand = (tr, R[0, 0], R[1, 1], R[2, 2])
-    k = int(np.argmax(cand))
+    geometry (retrograde equatorial included) divides by zero (sheet s4 step 4).  ``R`` is a 3x3
+    array or nested sequence; its entries are read once as floats (plain-float arithmetic: this
+    runs once per integration, and NumPy calls on 3-vectors cost microseconds each)."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = ((float(v) for v in row) for row in R)
+    tr = r00 + r11 + r22
+    cand = (tr, r00, r11, r22)
+    k = max(range(4), key=cand.__getitem__)  # the first largest, as np.argmax
     if k == 0:
         w = 0.5 * math.sqrt(1.0 + tr)
         f = 0.25 / w
-        e = (f * (R[2, 1] - R[1, 2]), f * (R[0, 2] - R[2, 0]), f * (R[1, 0] - R[0, 1]), w)
+        e = (f * (r21 - r12), f * (r02 - r20), f * (r10 - r01), w)
     elif k == 1:
-        x = 0.5 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        x = 0.5 * math.sqrt(1.0 + r00 - r11 - r22)
         f = 0.25 / x
-        e = (x, f * (R[0, 1] + R[1, 0]), f * (R[0, 2] + R[2, 0]), f * (R[2, 1] - R[1, 2]))
+        e = (x, f * (r01 + r10), f * (r02 + r20), f * (r21 - r12))
     elif k == 2:
-        y = 0.5 * math.sqrt(1.0 - R[0, 0] + R[1, 1] - R[2, 2])
+        y = 0.5 * math.sqrt(1.0 - r00 + r11 - r22)
         f = 0.25 / y
-        e = (f * (R[0, 1] + R[1, 0]), y, f * (R[1, 2] + R[2, 1]), f * (R[0, 2] - R[2, 0]))
+        e = (f * (r01 + r10), y, f * (r12 + r21), f * (r02 - r20))
     else:
-        z = 0.5 * math.sqrt(1.0 - R[0, 0] - R[1, 1] + R[2, 2])
+        z = 0.5 * math.sqrt(1.0 - r00 - r11 + r22)
         f = 0.25 / z
-        e = (f * (R[0, 2] + R[2, 0]), f * (R[1, 2] + R[2, 1]), z, f * (R[1, 0] - R[0, 1]))
+        e = (f * (r02 + r20), f * (r12 + r21), z, f * (r10 - r01))
     eta = np.array(e)
     return eta / np.linalg.norm(eta)
 
@@ -313,7 +339,7 @@ def cartesian_to_dromo(r_m, v_m_s, mu_m3_s2: float, length_m: float, sigma0: flo
     c, sn = math.cos(sigma0), math.sin(sigma0)
     x = [c * i[a] - sn * j[a] for a in range(3)]
     y = [sn * i[a] + c * j[a] for a in range(3)]
-    R = np.array([[x[a], y[a], k[a]] for a in range(3)])
+    R = [[x[a], y[a], k[a]] for a in range(3)]
     q1 = e[0] * x[0] + e[1] * x[1] + e[2] * x[2]
     q2 = e[0] * y[0] + e[1] * y[1] + e[2] * y[2]
     return np.concatenate([[q1, q2, 1.0 / h], quaternion_from_frame(R)])
@@ -324,18 +350,31 @@ def _cross(ax, ay, az, bx, by, bz):
 
 
 def dromo_to_cartesian(sigma: float, elements, mu_m3_s2: float, length_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """(r in m, v in m/s) from the ideal anomaly and the DROMO elements (sheet s7)."""
+    """(r in m, v in m/s) from the ideal anomaly and the DROMO elements (sheet s7).
+
+    Plain floats, the same operations as the vector form r = (L/(q3^2 s)) i,
+    v = (L/T)(q3 kappa i + q3 s j) with i = cos(sigma) x + sin(sigma) y, j = -sin(sigma) x +
+    cos(sigma) y and x, y the first two columns of :func:`frame_from_quaternion` (bit-for-bit:
+    tests/test_dromo.py); NumPy on 3-vectors cost ~15 us a call here, three calls a run."""
     L, T = units(mu_m3_s2, length_m)
-    q1, q2, q3 = (float(v) for v in elements[:3])
-    R = frame_from_quaternion(elements[3:7])
-    x, y = R[:, 0], R[:, 1]
+    q1, q2, q3, e1, e2, e3, e4 = (float(v) for v in elements[:7])
+    # columns x, y of R = [x y k] (frame_from_quaternion)
+    x = (1 - 2 * (e2 * e2 + e3 * e3), 2 * (e1 * e2 + e3 * e4), 2 * (e1 * e3 - e2 * e4))
+    y = (2 * (e1 * e2 - e3 * e4), 1 - 2 * (e1 * e1 + e3 * e3), 2 * (e2 * e3 + e1 * e4))
     c, sn = math.cos(sigma), math.sin(sigma)
-    i = c * x + sn * y
-    j = -sn * x + c * y
     s = 1.0 + q1 * c + q2 * sn
     kap = q1 * sn - q2 * c
-    r = (L / (q3 * q3 * s)) * i
-    v = (L / T) * (q3 * kap * i + q3 * s * j)
+    rn = L / (q3 * q3 * s)
+    vs = L / T
+    a = q3 * kap
+    b = q3 * s
+    r = np.empty(3)
+    v = np.empty(3)
+    for n in range(3):
+        i = c * x[n] + sn * y[n]
+        j = -sn * x[n] + c * y[n]
+        r[n] = rn * i
+        v[n] = vs * (a * i + b * j)
     return r, v
 
 
