@@ -42,6 +42,7 @@ from ..kernel.layout import (
     H_NRIGID,
     H_NROOT,
     H_NTETH,
+    H_OFF_FORM,
     H_OFF_ORDER,
     H_OFF_ROD,
     H_OFF_TETH,
@@ -213,11 +214,55 @@ def rod_blocks(y, p, m1, blk):
     return 0
 
 
+#: offset of the frame's angular velocity in the cowell-orbit block (formulations/cowell_orbit.OP_W;
+#: tests/test_orbit_frame.py checks that they agree)
+FRAME_OP_W = 0
+
+
+@njit(cache=True)
+def _frame_shift(p, g, sg):
+    """sg = S (flat 3x3): g I in the inertial frame; (g I + W)^2 / g in the frame turning with
+    omega (W = [omega x]), where the Coriolis and centrifugal terms -2 W x' - W^2 x of every joint
+    enter the Newton matrix as M_x (g + 2 W + W^2/g) (docs/integrators.md section 11).  Returns
+    True when the frame turns."""
+    for c in range(9):
+        sg[c] = 0.0 * g
+    for a in range(3):
+        sg[4 * a] = g
+    if int(p[H_FORM]) != FORM_COWELL_ORBIT:
+        return False
+    o = int(p[H_OFF_FORM]) + FRAME_OP_W
+    wx = p[o]
+    wy = p[o + 1]
+    wz = p[o + 2]
+    w = (0.0, -wz, wy, wz, 0.0, -wx, -wy, wx, 0.0)
+    ginv = 1.0 / g
+    for a in range(3):
+        for c in range(3):
+            w2 = 0.0
+            for e in range(3):
+                w2 += w[3 * a + e] * w[3 * e + c]
+            sg[3 * a + c] += 2.0 * w[3 * a + c] + w2 * ginv
+    return True
+
+
+@njit(cache=True)
+def _mass_times(b, off, sg, out):
+    """out = (3x3 block of b at off) . sg, flat row-major."""
+    for a in range(3):
+        for c in range(3):
+            acc = 0.0 * sg[0]
+            for e in range(3):
+                acc += b[off + 3 * a + e] * sg[3 * e + c]
+            out[3 * a + c] = acc
+
+
 @njit(cache=True)
 def factor(p, blk, g, fac):
     """Block-Thomas factorisation of N = g M_x - C_x - K_x/g (g real or complex) into ``fac``.
 
-    Tethers leaves first (p[H_OFF_ORDER]); per tether from the tip joint to the first: S_n = P_n +
+    In the frame turning with the orbit every g M block is M S, S = (g I + W)^2/g
+    (:func:`_frame_shift`).  Tethers leaves first (p[H_OFF_ORDER]); per tether from the tip joint to the first: S_n = P_n +
     g mf I + (the Schur terms of the tethers hanging from the tip body), S_j = P_j + P_{j+1} -
     Q_{j+1} S_{j+1}^-1 Q_{j+1}, with the rod blocks P = g MAA + KV + KEL/g, Q = g MAB - KV - KEL/g;
     each tether's first rod adds P_1 - Q_1 S_1^-1 Q_1 to its parent body's joint, and the root gets
@@ -232,10 +277,14 @@ def factor(p, blk, g, fac):
     ginv = 1.0 / g
     s = np.zeros(9, dtype=fac.dtype)
     tmp = np.zeros(9, dtype=fac.dtype)
+    sg = np.zeros(9, dtype=fac.dtype)
+    _frame_shift(p, g, sg)
+    maa = np.zeros(9, dtype=fac.dtype)
+    mab = np.zeros(9, dtype=fac.dtype)
     # Schur terms collected at each body's joint: row 0 the root, row 1 + k the tip of tether k
     acc = np.zeros((nteth + 1, 9), dtype=fac.dtype)
-    for a in range(3):
-        acc[0, 4 * a] = g * m0 if free_root else g
+    for c in range(9):
+        acc[0, c] = m0 * sg[c] if free_root else (g if c % 4 == 0 else 0.0)
     for j in range(nteth):
         k = int(p[offo + j])
         tb = offt + k * TT_SIZE
@@ -246,23 +295,26 @@ def factor(p, blk, g, fac):
             gr = g0 + i
             b = blk[gr]
             f = fac[gr]
+            _mass_times(b, B_MAA, sg, maa)
+            _mass_times(b, B_MAB, sg, mab)
             # Q of rod gr (couples its joints A and B), kept for the solve
             for c in range(9):
-                f[F_Q + c] = g * b[B_MAB + c] - b[B_KV + c] - b[B_KEL + c] * ginv
+                f[F_Q + c] = mab[c] - b[B_KV + c] - b[B_KEL + c] * ginv
             # S of joint B_gr: P of rod gr, plus P of rod gr+1 minus its Schur term, or the tip
             for c in range(9):
-                s[c] = g * b[B_MAA + c] + b[B_KV + c] + b[B_KEL + c] * ginv
+                s[c] = maa[c] + b[B_KV + c] + b[B_KEL + c] * ginv
             if i == n - 1:
                 if mf > 0.0:
-                    for a in range(3):
-                        s[4 * a] += g * mf
+                    for c in range(9):
+                        s[c] += mf * sg[c]
                 for c in range(9):
                     s[c] += acc[1 + k, c]
             else:
                 bn = blk[gr + 1]
                 fn = fac[gr + 1]
+                _mass_times(bn, B_MAA, sg, maa)
                 for c in range(9):
-                    s[c] += g * bn[B_MAA + c] + bn[B_KV + c] + bn[B_KEL + c] * ginv
+                    s[c] += maa[c] + bn[B_KV + c] + bn[B_KEL + c] * ginv
                 _sub_qsq(s, fn, tmp)
             det = _inv3(s, tmp)
             if det == 0.0 or not np.isfinite(abs(det)):
@@ -273,8 +325,9 @@ def factor(p, blk, g, fac):
         if parent > 0 or free_root:
             b = blk[g0]
             row = acc[parent]
+            _mass_times(b, B_MAA, sg, maa)
             for c in range(9):
-                row[c] += g * b[B_MAA + c] + b[B_KV + c] + b[B_KEL + c] * ginv
+                row[c] += maa[c] + b[B_KV + c] + b[B_KEL + c] * ginv
             _sub_qsq(row, fac[g0], tmp)
     det = _inv3(acc[0], tmp)
     if det == 0.0 or not np.isfinite(abs(det)):
@@ -346,9 +399,28 @@ def solve(p, blk, g, fac, m1, b):
             for c in range(3):
                 xv[o + c] = xv[oa + c] + 2.0 * SQ3 * b[m1 + o + c]
                 xq[o + c] = xq[oa + c] + 2.0 * SQ3 * b[o + c]
-    # s = M_x xv + K_x xq / g, assembled rod by rod (root row: m0 xv, or xv itself when fixed)
+    # s = M_x xm + K_x xq / g, assembled rod by rod (root row: m0 xm, or xv itself when fixed);
+    # xm = xv, or xv - W^2 xq / g in the frame turning with omega (the centrifugal term's share)
+    sg = np.zeros(9, dtype=b.dtype)
+    xm = xv
+    if _frame_shift(p, g, sg):
+        o = int(p[H_OFF_FORM]) + FRAME_OP_W
+        wx = p[o]
+        wy = p[o + 1]
+        wz = p[o + 2]
+        xm = np.empty(m1, dtype=b.dtype)
+        for j in range(m1 // 3):
+            q0 = xq[3 * j]
+            q1 = xq[3 * j + 1]
+            q2 = xq[3 * j + 2]
+            wq = wx * q0 + wy * q1 + wz * q2
+            ww = wx * wx + wy * wy + wz * wz
+            # W^2 q = w (w . q) - |w|^2 q
+            xm[3 * j] = xv[3 * j] - (wx * wq - ww * q0) * ginv
+            xm[3 * j + 1] = xv[3 * j + 1] - (wy * wq - ww * q1) * ginv
+            xm[3 * j + 2] = xv[3 * j + 2] - (wz * wq - ww * q2) * ginv
     for c in range(3):
-        s[c] = m0 * xv[c] if free_root else xv[c]
+        s[c] = m0 * xm[c] if free_root else xv[c]
     for k in range(nteth):
         tb = offt + k * TT_SIZE
         n = int(p[tb + TT_NRODS])
@@ -365,15 +437,15 @@ def solve(p, blk, g, fac, m1, b):
                 mb = 0.0 * s[0]
                 ke = 0.0 * s[0]
                 for c in range(3):
-                    ma += bl[B_MAA + 3 * a + c] * xv[oa + c] + bl[B_MAB + 3 * a + c] * xv[ob + c]
-                    mb += bl[B_MAB + 3 * a + c] * xv[oa + c] + bl[B_MAA + 3 * a + c] * xv[ob + c]
+                    ma += bl[B_MAA + 3 * a + c] * xm[oa + c] + bl[B_MAB + 3 * a + c] * xm[ob + c]
+                    mb += bl[B_MAB + 3 * a + c] * xm[oa + c] + bl[B_MAA + 3 * a + c] * xm[ob + c]
                     ke += bl[B_KEL + 3 * a + c] * (xq[ob + c] - xq[oa + c])
                 if oa > 0 or free_root:
                     s[oa + a] += ma + ke * ginv
                 s[ob + a] += mb - ke * ginv
             if i == n - 1 and mf > 0.0:
                 for a in range(3):
-                    s[ob + a] += mf * xv[ob + a]
+                    s[ob + a] += mf * xm[ob + a]
     # forward elimination of the right-hand side, leaves first (tip -> parent joint)
     for j in range(nteth):
         k = int(p[offo + j])
