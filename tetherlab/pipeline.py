@@ -564,7 +564,7 @@ def _quasi_static(model, y0, r_ref, reference, root_name, tethers):
     shape the non-conservative forces (electrodynamic, drag) hold it in at t = 0.  Those forces
     vary along the orbit at the orbital frequency, far below the tether's lateral modes, so from
     this start the lateral modes are hardly excited; from the straight start they ring undamped for
-    the whole run (the de-orbit: docs/integrators.md, section 9).  The centre of mass still
+    the whole run (the de-orbit: docs/integrators.md, section 11).  The centre of mass still
     decelerates: only the relative motion is in equilibrium.  Newton with a finite-difference
     Jacobian (3 n unknowns; set-up cost only).
     """
@@ -759,7 +759,7 @@ def integrate_prepared(prep: Prepared, p: np.ndarray, progress=None):
 
 
 #: The frame of formulation "cowell-orbit" is re-anchored (its rate reset to the root body's) every
-#: this many reference orbital periods (docs/integrators.md section 9: measured 2, 5, 20, never).
+#: this many reference orbital periods (docs/integrators.md section 11: measured 1, 5, 20, never).
 ANCHOR_ORBITS = 5.0
 
 
@@ -785,7 +785,9 @@ def _integrate_cowell_orbit(prep: Prepared, p: np.ndarray, progress):
     sums: dict = {}
     budget = prep.max_steps
     k_out = 0  # first output not yet produced
-    pe = p
+    # one parameter block for the whole run (the model's counters and failure records carry on);
+    # each segment sets its frame in it
+    pe = co.attach(p, co.frame_rate(y_in, nqt), t_a)
     while True:
         t_b = min(t_a + seg_s, t_last)
         if t_last - t_b < 1e-6 * seg_s:  # no sliver of a segment at the end
@@ -797,7 +799,7 @@ def _integrate_cowell_orbit(prep: Prepared, p: np.ndarray, progress):
             seg_t = np.concatenate([seg_t, [t_b]])
         omega = co.frame_rate(y_in, nqt)
         anchors.append([t_a, *omega.tolist()])
-        pe = co.attach(p, omega, t_a)
+        co.set_frame(pe, omega, t_a)
         res = integrate(prep.method, co.cowell_orbit_rhs, t_a, co.to_frame(0.0, y_in, omega, nqt), seg_t, pe,
                         prep.rtol, prep.atol, h_max=prep.h_max, max_steps=budget, progress=progress,
                         second_order=True, **_event_args(prep))  # fmt: skip

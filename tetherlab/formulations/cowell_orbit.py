@@ -49,19 +49,24 @@ OP_SCR = 4
 
 def attach(p: np.ndarray, omega_rad_s: np.ndarray, t_anchor_s: float = 0.0) -> np.ndarray:
     """A copy of the model's parameter block with the frame block appended (header H_OFF_FORM)."""
-    omega = np.asarray(omega_rad_s, dtype=float).reshape(3)
-    if not (np.all(np.isfinite(omega)) and float(omega @ omega) > 0.0):
-        raise ValueError(f"omega_rad_s: expected a finite non-zero angular velocity; got {omega.tolist()}")
     n = int(p[H_NSTATE])
-    block = np.zeros(OP_SCR + 2 * n)
-    block[OP_W : OP_W + 3] = omega
-    block[OP_T0] = t_anchor_s
     off = p.size
-    out = np.concatenate([p, block])
+    out = np.concatenate([p, np.zeros(OP_SCR + 2 * n)])
     out[H_LEN] = out.size
     out[H_OFF_FORM] = off
     out[H_FORM] = FORM_COWELL_ORBIT
+    set_frame(out, omega_rad_s, t_anchor_s)
     return out
+
+
+def set_frame(pe: np.ndarray, omega_rad_s, t_anchor_s: float) -> None:
+    """Re-anchor the frame of a block made by :func:`attach` (in place)."""
+    omega = np.asarray(omega_rad_s, dtype=float).reshape(3)
+    if not (np.all(np.isfinite(omega)) and float(omega @ omega) > 0.0):
+        raise ValueError(f"omega_rad_s: expected a finite non-zero angular velocity; got {omega.tolist()}")
+    off = int(pe[H_OFF_FORM])
+    pe[off + OP_W : off + OP_W + 3] = omega
+    pe[off + OP_T0] = t_anchor_s
 
 
 @njit(cache=True)
