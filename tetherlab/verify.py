@@ -924,8 +924,8 @@ RETIRED = {
 #: with their sweeps in one process): only the order in which sections are handed to the workers
 #: (longest first, so that none starts last on an idle pool) depends on these, never a result
 SECTION_COST_S = {
-    "study:workprecision": 330, "study:hard_cases": 300, "study:fidelity": 255, "study:deorbit": 170,
-    "study:convergence": 120, "study:rigid_bodies": 56, "controls": 55, "study:bead_vs_tmed": 50,
+    "study:fidelity": 255, "study:hard_cases": 210, "study:workprecision": 200, "study:convergence": 180,
+    "study:deorbit": 170, "study:rigid_bodies": 56, "controls": 55, "study:bead_vs_tmed": 50,
     "study:stiefel_table": 34, "study:rigid_scenes": 33, "figures": 20, "check:invariants": 13,
     "check:vertical": 12, "check:libration": 7, "check:reproducible": 5, "study:catenary": 5,
 }
