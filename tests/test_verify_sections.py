@@ -61,3 +61,12 @@ def test_two_workers_give_the_serial_values(tmp_path):
         for a, b in zip(serial[t]["rows"], pooled[t]["rows"]):
             assert {k: v for k, v in a.items() if not (isinstance(v, float) and math.isnan(v))} == {
                 k: v for k, v in b.items() if not (isinstance(v, float) and math.isnan(v))}
+
+
+def test_idle_machine_estimate_hands_out_longest_first():
+    # costs 5 (fidelity), 4 (hard cases), 3 (work-precision) by SECTION_COST_S order; two cores:
+    # worker A takes 5, worker B 4, then B (free first, at 4) takes 3 -> max(5, 7) = 7
+    res = {"study:fidelity": {"cpu_s": 5.0}, "study:hard_cases": {"cpu_s": 4.0},
+           "study:workprecision": {"cpu_s": 3.0}}
+    assert verify.idle_machine_wall_s(res, 2) == 7.0
+    assert verify.idle_machine_wall_s(res, 1) == 12.0

@@ -945,7 +945,7 @@ def run_task(task: str, out: str, study_workers: int | None = None) -> dict:
     Never raises: a section that fails returns its error beside everything it computed before
     the failure (the rows so far; a study's own files stay in its directory)."""
     out = Path(out)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     res = {"task": task, "rows": [], "values": {}, "error": None}
     try:
         if task.startswith("check:"):
@@ -970,8 +970,21 @@ def run_task(task: str, out: str, study_workers: int | None = None) -> dict:
         res["error"] = f"{type(exc).__name__}: {exc}"
         res["traceback"] = traceback.format_exc()[-2000:]
     res["wall_s"] = time.perf_counter() - t0
+    res["cpu_s"] = time.process_time() - c0  # this process only: the studies' sweeps run in it (workers=1)
     res["pid"] = os.getpid()
     return res
+
+
+def idle_machine_wall_s(results: dict, jobs: int) -> float:
+    """The wall time the sections would take on ``jobs`` idle cores: their CPU times handed out
+    longest-first (as run_tasks does) to the first free worker.  On a shared machine the measured
+    wall time includes the other users' load; this estimate does not (it omits the start-up of the
+    workers and a section's waiting on anything but its own CPU)."""
+    free = [0.0] * max(1, jobs)
+    for t in sorted(results, key=lambda t: -SECTION_COST_S.get(t, 1)):
+        k = free.index(min(free))
+        free[k] += results[t].get("cpu_s", math.nan)
+    return max(free)
 
 
 def run_tasks(tasks: list[str], out: Path, jobs: int, log=print) -> dict:
@@ -1093,11 +1106,15 @@ def main(argv=None) -> int:
         for r in gate_rows:
             f.write(f"{r['gate']},{r['value']},{r['threshold']},{r['unit']},{r['result']}\n")
     with open(out / "sections.csv", "w") as f:  # where the time went (order and workers vary; results do not)
-        f.write("section,wall_s,worker_pid,result\n")
+        f.write("section,wall_s,cpu_s,worker_pid,result\n")
         for t in tasks:
             r = results[t]
-            f.write(f"{t},{r['wall_s']:.1f},{r.get('pid', '')},{'FAILED' if r['error'] else 'ok'}\n")
+            f.write(f"{t},{r['wall_s']:.1f},{r.get('cpu_s', math.nan):.1f},{r.get('pid', '')},"
+                    f"{'FAILED' if r['error'] else 'ok'}\n")
     wall = time.perf_counter() - t0
+    cpu = sum(r.get("cpu_s", math.nan) for r in results.values())
+    print(f"sections: {cpu:.0f} s of CPU; on {args.jobs} idle core(s), longest first: about "
+          f"{idle_machine_wall_s(results, args.jobs):.0f} s (measured wall {wall:.0f} s; OUT/sections.csv)", flush=True)
 
     from . import report
     from .provenance import footer, git_commit
