@@ -371,8 +371,9 @@ def rod_axis_figure(rows, out: Path) -> None:
     ns = sorted({_rods_of(r["case"]) for r in pts})
     cmap = plt.get_cmap("viridis")
     for k, n in enumerate(ns):
+        # joined in tolerance order (as the other figures): the wall time need not fall with it
         good = sorted((r for r in pts if _rods_of(r["case"]) == n and _finite_pos(r["error_m"])
-                       and _finite_pos(r["wall_s"])), key=lambda r: r["wall_s"])  # fmt: skip
+                       and _finite_pos(r["wall_s"])), key=lambda r: -r["tol"])  # fmt: skip
         if good:
             ax.loglog([r["wall_s"] for r in good], [r["error_m"] for r in good], "o-", ms=4,
                       color=cmap(k / max(1, len(ns) - 1)), label=f"n = {n}")
