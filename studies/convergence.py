@@ -71,6 +71,47 @@ def quantity_table(case, a) -> list[str]:
     return lines + [""]
 
 
+def fit_exponent(ns, costs) -> float:
+    """Least-squares slope of log(cost) on log(n) (NaN with fewer than two positive points)."""
+    pts = [(math.log(n), math.log(c)) for n, c in zip(ns, costs) if c is not None and math.isfinite(c) and c > 0]
+    if len(pts) < 2:
+        return math.nan
+    mx = sum(x for x, _ in pts) / len(pts)
+    my = sum(y for _, y in pts) / len(pts)
+    sxx = sum((x - mx) ** 2 for x, _ in pts)
+    return sum((x - mx) * (y - my) for x, y in pts) / sxx if sxx > 0 else math.nan
+
+
+def cost_table(study, results, min_n: int = 8) -> list[str]:
+    """Markdown: each case's run wall time (set-up, integration and summary in the worker) and
+    integration steps against n, with the fitted exponent of the wall time over n >= min_n (below
+    that the fixed set-up costs dominate)."""
+    ns = sorted({r.params[ROD_KEY] for c in study.cases for r in results[c.id].records})
+    lines = ["Cost of each run against the rod count (wall s, whole run in its worker: set-up with the "
+             "equilibrium solve, integration, summary; steps in brackets), and the least-squares exponent "
+             f"of wall time against n over n >= {min_n}:", "",
+             "| case | " + " | ".join(f"n = {n}" for n in ns) + f" | wall ~ n^p (n >= {min_n}) |",
+             "|---|" + "---|" * (len(ns) + 1)]
+    for case in study.cases:
+        recs = {r.params[ROD_KEY]: r for r in results[case.id].records}
+        cells, fit_n, fit_w = [], [], []
+        for n in ns:
+            r = recs.get(n)
+            if r is None:
+                cells.append("")
+            elif not r.ok:
+                cells.append("failed")
+            else:
+                steps = r.summary.get("n_steps", math.nan)
+                cells.append(f"{r.wall_s:.3g} ({steps:.0f})")
+                if n >= min_n:
+                    fit_n.append(n)
+                    fit_w.append(r.wall_s)
+        p = fit_exponent(fit_n, fit_w)
+        lines.append(f"| {case.id} | " + " | ".join(cells) + f" | {p:.2f} |")
+    return lines + [""]
+
+
 def figure(case, analysis, path):
     import matplotlib
 
@@ -141,7 +182,8 @@ def main(argv=None) -> int:
                 table.append(f"{case.id},{a['quantity']},{n},{v!r},{p!r},{a['limit']!r},{a['order']!r},{w!r}")
     (out / "convergence.csv").write_text("case,quantity,rods,value,order_from_last_three,richardson_estimate,"
                                          "observed_order,wall_s\n" + "\n".join(table) + "\n")
-    md += ["", *sections, f"Study wall time {wall:.0f} s (runs cached in the output's cache/ are not rerun).", "",
+    md += ["", *sections, *cost_table(study, results),
+           f"Study wall time {wall:.0f} s (runs cached in the output's cache/ are not rerun).", "",
            "Figures (|value - Richardson estimate| against n):", "",
            *(f"![{c.id}](convergence-{c.id}.png)" for c in study.cases), ""]
     if failures:

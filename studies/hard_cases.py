@@ -64,6 +64,44 @@ clear error (never garbage) where a case leaves the model's validity".  Here:
    errors move it by ~1e-9 s; a stop that is garbage, or an accident of the step size, does
    not repeat across a factor 100 in tolerance).
 
+5. **n = 512 rods stay stable over an orbit** (issue 11; studies/scenes/hard-n512.toml: the
+   bench-libration tether in 512 rods of 9.77 m, damped D = 2e4 N s, energy model, swinging from
+   theta0 = 30 deg, started straight and unstrained; one run, radau5 at the scene's 1e-9, the
+   structured O(n) Newton matrix).  Stable means, physically (docs/verification.md section 5):
+
+   a. the run reaches the end of the orbit: no SimulationError (no Newton failure stop, no rod
+      collapse, no step-size underflow) and every output finite;
+   b. **the rod strain stays inside the static envelope.**  A straight tether librating in plane
+      rotates at n + theta' in the orbit frame, so a point at s from the centre of mass feels the
+      axial field s K, K = (n + theta')^2 + n^2 (3 cos^2 theta - 1) (centrifugal plus gravity
+      gradient, Hill's equations).  Its tension peaks at the centre of mass,
+      T = K (m0 s_c + mu_t s_c^2 / 2), s_c = (mf L + mt L / 2) / M.  The rigid dumbbell's in-plane
+      libration has theta'^2 = 3 n^2 (sin^2 theta0 - sin^2 theta), so K is largest through the
+      vertical: K_max = n^2 ((1 + sqrt3 sin theta0)^2 + 2) (5.48 n^2 at 30 deg, against 3 n^2 at
+      rest on the vertical).  eps_qs = T(K_max) / EA.  The unstrained start applies the load
+      K(theta0) = 3 n^2 cos^2 theta0 suddenly; a suddenly loaded elastic system overshoots to
+      twice its static strain, 2 K(theta0)/K_max eps_qs = 0.82 eps_qs, below eps_qs.  After that
+      the load varies with the libration (sqrt3 n) far below the first axial mode
+      (sqrt(EA / (L mf)) = 0.32 /s): quasi-static.  Envelope: |eps| <= max(eps_qs, 2 K(theta0)/
+      K_max eps_qs) (1 + beta), beta = 10 (L/r0 + eps_qs + (sqrt3 n / w_axial)^2): ten times the
+      terms the rigid theory drops (gravity gradient beyond first order in s/r0, the stretch
+      itself, dynamic amplification).  A tether going unstable (energy fed into its axial or
+      lateral modes) leaves this envelope;
+   c. **energy and angular momentum against their integration budgets.**  H about the Earth's
+      centre is exact (central gravity; the damping is internal and axial); with damping the
+      energy model can only lose energy (docs/model.md 6.2: dE/dt = -sum D L eps'^2), so only a
+      rise of E counts.  Budget as for the power-balance gate (docs/verification.md 1): each step's
+      local error is at most rtol in the scaled norm, no amplification of an invariant's error,
+      so B_X = N rtol S_X (N accepted steps, S_H, S_E the scales of part 2).  Ratios
+      max|dH| / B_H and max_t (E - E(0)) / B_E.  (The round-off bound of part 2 is not the
+      budget here: at 1e-8 ... 1e-10 this run's H error is 1e4 times above round-off and falls
+      only 2x a decade, see docs/verification.md 5.)
+
+   Gate hard_cases_n512_stability = the largest of the three ratios (inf if the run failed).
+   Negative control (:func:`n512_negative_control`): the damping with the wrong sign
+   (tetherlab.mutants damping_sign, T = EA eps - D eps'): anti-damped axial modes grow, and the
+   gate must fail (its value, or a SimulationError, which counts as inf).
+
 Ladders: 1e-9, 1e-10, 1e-11 by default; 1e-8, 1e-9, 1e-10 for the stiff (EA x 1000) and 35-day
 cases, whose runs at 1e-10 / 1e-11 differ by no more than the floor F (the loose pair must
 resolve the integration error) and whose invariants are within their bounds at 1e-10.
@@ -109,6 +147,11 @@ SLACK_SLOT: list = [
      {"duration": "600 s", "tethers.main.model": "energy"}, {"measure": "switch_times"}),
 ]
 CASES += SLACK_SLOT
+
+# Part 5: n = 512 over one orbit, one run at the scene's tolerance, its own criterion
+N512_CASE = "n = 512, damped, 1 orbit"
+N512_SCENE = "hard-n512.toml"
+N512_CONTROL_DURATION = "0.02 orbits"  # anti-damped modes grow in seconds; 127 s is plenty to see it
 
 
 def ladder(crit) -> tuple[float, float, float]:
@@ -266,11 +309,108 @@ def printed_negative_control(paper_tight: dict, fname: str = "hard-massratio-sma
     return {"dH_own": dh, "B_H_own": b_h, "over_bound": dh / b_h, "steps": r.stats["n_accepted"]}
 
 
+def strain_envelope(scene) -> dict:
+    """The static strain envelope of part 5b (module doc) for a two-body tether librating in plane
+    from theta0 with theta' = 0 in the orbit frame; every input from the scene."""
+    t = scene.tethers[0]
+    m0, mf = scene.body(t.from_body).mass_kg, scene.body(t.to_body).mass_kg
+    mt, L, ea = t.mass_kg, t.length_m, t.EA_N
+    th0 = t.initial.theta_rad if isinstance(t.initial.theta_rad, float) else t.initial.theta_rad[0]
+    r0 = scene.orbit.elements.a_m
+    n2 = scene.central_body.mu_m3_s2 / r0**3
+    s_c = (mf * L + mt * L / 2.0) / (m0 + mf + mt)
+    k_max = n2 * ((1.0 + math.sqrt(3.0) * abs(math.sin(th0))) ** 2 + 2.0)
+    k_start = n2 * 3.0 * math.cos(th0) ** 2
+    eps_qs = k_max * (m0 * s_c + mt / L * s_c**2 / 2.0) / ea
+    eps_start = 2.0 * k_start / k_max * eps_qs
+    w_axial = math.sqrt(ea / (L * mf))
+    beta = 10.0 * (L / r0 + eps_qs + 3.0 * n2 / w_axial**2)
+    return {"eps_qs": eps_qs, "eps_start_overshoot": eps_start, "beta": beta,
+            "envelope": max(eps_qs, eps_start) * (1.0 + beta)}
+
+
+def n512_stability(summary: dict | None, error: str | None, scene) -> dict:
+    """Part 5's measurements and verdict from one run's invariants summary (None: the run failed
+    with ``error``).  ``stability`` is the gate value: the largest of the three ratios."""
+    env = strain_envelope(scene)
+    out = {"case": N512_CASE, **env, "reasons": []}
+    if summary is None:
+        out.update(stability=math.inf, passed=False)
+        out["reasons"].append(f"run failed: {error}")
+        return out
+    tol = float(scene.integrator.rtol)
+    strain = max(abs(summary["strain_min"]), abs(summary["strain_max"]))
+    b_h = summary["n_steps"] * tol * summary["angmom_sum_scale"]
+    b_e = summary["n_steps"] * tol * summary["energy_sum_scale"]
+    out.update(strain_min=summary["strain_min"], strain_max=summary["strain_max"],
+               strain_over_envelope=strain / env["envelope"], dH_own=summary["angmom_error_own"],
+               B_H_int_own=b_h, dH_over_budget=summary["angmom_error_own"] / b_h,
+               dE_rise_own=summary["energy_rise_own"], dE_own=summary["energy_error_own"], B_E_int_own=b_e,
+               dE_rise_over_budget=max(summary["energy_rise_own"], 0.0) / b_e, steps=summary["n_steps"],
+               wall_s=summary["wall_s"], nonfinite=summary["nonfinite"])  # fmt: skip
+    ratios = [out["strain_over_envelope"], out["dH_over_budget"], out["dE_rise_over_budget"]]
+    out["stability"] = max(ratios) if summary["nonfinite"] == 0 and all(map(math.isfinite, ratios)) else math.inf
+    if summary["nonfinite"]:
+        out["reasons"].append(f"{summary['nonfinite']:.0f} non-finite outputs")
+    for key, what in (("strain_over_envelope", "|strain| over the static envelope"),
+                      ("dH_over_budget", "|dH| over N rtol S_H"), ("dE_rise_over_budget", "rise of E over N rtol S_E")):
+        if not out[key] <= 1.0:
+            out["reasons"].append(f"{what}: {out[key]:.3g} > 1")
+    out["passed"] = out["stability"] <= 1.0
+    return out
+
+
+def n512_run(scene) -> dict:
+    """One run of the n = 512 case through tetherlab.summaries.invariants -> n512_stability."""
+    from tetherlab.summaries import invariants
+
+    try:
+        summary, error = invariants(scene), None
+    except Exception as exc:  # a SimulationError (Newton failure stop, collapse) is a failed case
+        summary, error = None, f"{type(exc).__name__}: {exc}"[:300]
+    return n512_stability(summary, error, scene)
+
+
+def n512_negative_control(scene) -> dict:
+    """Part 5's control: the same scene with the damping's sign flipped (tetherlab.mutants
+    damping_sign), over N512_CONTROL_DURATION; its stability value must exceed 1 (inf if it
+    stops with a SimulationError)."""
+    from tetherlab import mutants
+
+    with mutants.active("damping_sign"):
+        return n512_run(scene.replace(**{"duration": N512_CONTROL_DURATION}))
+
+
+def n512_md(r: dict, control: dict | None) -> list[str]:
+    md = ["", "### n = 512 rods over one orbit (issue 11)", "",
+          "studies/scenes/hard-n512.toml: 512 rods of 9.77 m, D = 2e4 N s, energy model, theta0 = 30 deg, straight and "
+          "unstrained start, one orbit, radau5 (structured Newton matrix). Stable (part 5 of studies/hard_cases.py, "
+          "docs/verification.md 5): the run ends; every rod's |strain| inside the static envelope of the librating "
+          "tether, max(eps_qs, overshoot of the sudden start) (1 + beta); |dH| and the rise of E within their "
+          "integration budgets N rtol S.", "",
+          "| run | result | strain min | strain max | eps_qs (theory) | envelope | strain / envelope | dH/(I n) | "
+          "N rtol S_H | rise of E/(I n^2) | N rtol S_E | max abs dE/(I n^2) | steps | integration wall (s) | gate value | notes |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for label, x in (("n = 512, 1 orbit", r), ("control: damping sign flipped, 0.02 orbit", control)):
+        if x is None:
+            continue
+        verdict = ("PASS" if x["passed"] else "FAIL") if x is r else ("caught" if not x["passed"] else "NOT CAUGHT")
+        if "strain_max" not in x:
+            md.append(f"| {label} | {verdict} | | | {x['eps_qs']:.4g} | {x['envelope']:.4g} | | | | | | | | | inf | "
+                      f"{'; '.join(x['reasons']).replace('|', '/')[:240]} |")
+            continue
+        md.append(f"| {label} | {verdict} | {x['strain_min']:.4g} | {x['strain_max']:.5g} | {x['eps_qs']:.5g} | "
+                  f"{x['envelope']:.5g} | {x['strain_over_envelope']:.4f} | {x['dH_own']:.3g} | {x['B_H_int_own']:.3g} | "
+                  f"{x['dE_rise_own']:.3g} | {x['B_E_int_own']:.3g} | {x['dE_own']:.3g} | {x['steps']:.0f} | "
+                  f"{x['wall_s']:.3g} | {x['stability']:.3g} | {'; '.join(x['reasons'])} |")  # fmt: skip
+    return md + [""]
+
+
 def _g(v, fmt=".3g"):
     return "" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, fmt)
 
 
-def report_md(rows, recs_by_case, control: dict | None = None) -> str:
+def report_md(rows, recs_by_case, control: dict | None = None, n512=None) -> str:
     md = ["## Hard cases", "",
           "Each case runs on three tolerances a decade apart (column ladder). Pass (issue 4): no NaN in any run; at "
           "the tightest tolerance the invariants within their round-off bounds; results converging as the tolerance "
@@ -325,6 +465,8 @@ def report_md(rows, recs_by_case, control: dict | None = None) -> str:
            "the lead), the same growth as the differences between tolerances. The tether starts straight and "
            "unstrained, so its tension is still building up (axial force 1e-5 ... 1.9 N against EA = 5e4 N at "
            "220 s): a nearly slack chain whose lateral motion is strongly nonlinear.", ""]
+    if n512 is not None:
+        md += n512_md(*n512)
     return "\n".join(md)
 
 
@@ -336,6 +478,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("out")
     ap.add_argument("--skip-long", action="store_true", help="leave out the 35-day case")
+    ap.add_argument("--skip-n512", action="store_true", help="leave out the n = 512 case (part 5)")
     ap.add_argument("--scheduler")
     ap.add_argument("--workers", type=int)
     ap.add_argument("--quiet", action="store_true")
@@ -366,6 +509,16 @@ def main(argv=None) -> int:
         if not control["over_bound"] > 1.0:
             failed.append("negative control (eq. 20 as printed within the H bound)")
 
+    n512 = n512_control = None
+    if not args.skip_n512:
+        sc512 = load_scene(SCENES / N512_SCENE)
+        n512 = n512_run(sc512)
+        n512_control = n512_negative_control(sc512)
+        if not n512["passed"]:
+            failed.append(N512_CASE)
+        if n512_control["passed"]:
+            failed.append("negative control of n = 512 (anti-damped tether inside the stability bounds)")
+
     import pandas as pd
 
     frame = res.frame()
@@ -386,9 +539,13 @@ def main(argv=None) -> int:
         "floor_over_loose_change": worst("floor_over_d1"),
         "stop_time_spread_s": worst("stop_time_spread_s"),
         "negative_control_over_bound": control["over_bound"] if control else None,
+        "n512_stability": n512["stability"] if n512 else None,
+        "n512_control_stability": n512_control["stability"] if n512_control else None,
+        "n512": n512,
+        "n512_control": n512_control,
     }
-    (out / "hard_cases_summary.json").write_text(json.dumps(summary, indent=1))
-    md = report_md(rows, recs_by_case, control)
+    (out / "hard_cases_summary.json").write_text(json.dumps(summary, indent=1, default=str))
+    md = report_md(rows, recs_by_case, control, (n512, n512_control) if n512 else None)
     (out / "hard_cases.md").write_text(md)
     print(md)
     if failed:

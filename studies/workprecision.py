@@ -16,6 +16,17 @@ deg) over one orbit, n = 1, 2, 4 rods; integrators dop853 and radau5 at rtol = a
 Also the Stiefel-Scheifele problem with Cowell and DROMO against the stored oracle, and one day of
 the de-orbit scene (n = 1) against dop853 at 1e-14.
 
+Rod count as an axis (issue 11): the damped libration scene (studies/scenes/bench-libration.toml,
+D = 2e4 N s, theta0 = 30 deg, one orbit) at n = 4, 8, ..., 128 rods, radau5 with its structured
+O(n) Newton matrix at rtol = atol = 1e-5 ... 1e-10, each against a radau5 reference at 1e-11 of
+the same n (the error of the discretisation in n is not in these numbers: each n is its own
+problem).  The reference's own error, measured once against radau5 at 1e-12 (loaded machine):
+2.6e-7 ... 1.3e-6 m for n = 4 ... 128, against 3.2e-6 ... 8.4e-6 m for the 1e-10 points, so the
+tightest points' errors are known to ~10 ... 40 %, the looser ones far better.  A 1e-12 reference
+cost 95 s at n = 128 (1e-11: 12 s), which the verify budget does not have.  Its own
+figure (work_precision_rods.png: error against wall time, one series per n) and tables: the error
+and wall time at every (n, tol), and the wall time's fitted exponent in n at each tolerance.
+
 heyoka on the same axes (Stiefel only).  heyoka's double-precision Taylor integrator
 (tetherlab.benchmarks.stiefel.heyoka_rows, through the summary
 tetherlab.summaries.stiefel_heyoka_final_state) runs the Stiefel problem at tolerances 1e-4 ...
@@ -53,6 +64,12 @@ REFERENCE = ("dop853", 1e-14)
 #: (heyoka clamps a tolerance below the epsilon to it: 1e-16 gives the epsilon's run, 7.3e-4 m)
 HEYOKA_TOLS = TOLERANCES + [1e-14, 1e-15, float(np.finfo(float).eps)]
 HEYOKA_CASE = "Stiefel heyoka"
+#: the rod-count axis (issue 11): damped libration, radau5 (structured Newton), reference of the same n
+ROD_AXIS_RODS = (4, 8, 16, 32, 64, 128)
+ROD_AXIS_TOLS = [10.0**-k for k in range(5, 11)]
+ROD_AXIS_REFERENCE = ("radau5", 1e-11)
+ROD_AXIS_DAMPING = "2e4 N s"  # as tetherlab/benchmarks/cost_vs_n.py's damped rows
+ROD_AXIS_PREFIX = "damped libration n="
 HEYOKA_METHOD = "heyoka taylor (double)"
 
 
@@ -209,9 +226,10 @@ def figures(rows, out: Path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    rod_axis_figure(rows, out)
     series = {}
     for r in rows:
-        if r["ok"]:
+        if r["ok"] and not str(r["case"]).startswith(ROD_AXIS_PREFIX):  # the rod axis has its own figure
             series.setdefault((r["case"], r["method"]), []).append(r)
     # colour = integrator, marker = case: every series stays identifiable past 10 of them
     methods = sorted({m for _, m in series})
@@ -279,6 +297,97 @@ def libration_cases(rods=(1, 2, 4), duration="1 orbits"):
     return cases
 
 
+def rod_axis_cases(rods=ROD_AXIS_RODS, duration="1 orbits", tols=None):
+    """The rod-count axis: the damped libration scene at each n, radau5 (``newton = "auto"``:
+    the structured Newton matrix from 4 rods on) against a radau5 reference at 1e-11 of the same n."""
+    from tetherlab.scene import load_scene
+
+    base = load_scene(HERE / "scenes" / "bench-libration.toml").replace(
+        **{"duration": duration, "output.count": 2, "tethers.main.damping": ROD_AXIS_DAMPING})
+    cases = []
+    for n in rods:
+        sc = base.replace(**{"tethers.main.rods": int(n)})
+        cases.append(Case(f"{ROD_AXIS_PREFIX}{int(n)}", sc, with_integrator(sc, *ROD_AXIS_REFERENCE),
+                          {"radau5": list(ROD_AXIS_TOLS if tols is None else tols)}))
+    return cases
+
+
+def _rods_of(case_label: str) -> int:
+    return int(case_label[len(ROD_AXIS_PREFIX):])
+
+
+def fit_exponent(ns, costs) -> float:
+    """Least-squares slope of log(cost) on log(n) (NaN with fewer than two positive points)."""
+    ns = np.asarray(ns, float)
+    c = np.asarray(costs, float)
+    ok = np.isfinite(c) & (c > 0)
+    if ok.sum() < 2:
+        return math.nan
+    return float(np.polyfit(np.log(ns[ok]), np.log(c[ok]), 1)[0])
+
+
+def rod_axis_tables(rows) -> list[str]:
+    """Markdown: error and wall time at every (n, tol) of the rod axis, and per tolerance the
+    fitted exponent of wall time (and of steps) against n: the speed table's trend over size."""
+    pts = [r for r in rows if str(r["case"]).startswith(ROD_AXIS_PREFIX)]
+    if not pts:
+        return []
+    ns = sorted({_rods_of(r["case"]) for r in pts})
+    tols = sorted({r["tol"] for r in pts}, reverse=True)
+    cell = {(_rods_of(r["case"]), r["tol"]): r for r in pts}
+    md = ["### Rod count as an axis: damped libration, radau5 (structured Newton), one orbit", "",
+          f"Each n against a radau5 run at {ROD_AXIS_REFERENCE[1]:g} of the same n (final body positions, m); D = "
+          f"{ROD_AXIS_DAMPING}. Wall time = integration only. Error (m) / wall (s) at each rod count and tolerance; "
+          "last columns: least-squares exponent of wall time and of accepted steps against n over the rods shown.", "",
+          "| tol | " + " | ".join(f"n = {n}" for n in ns) + " | wall ~ n^p | steps ~ n^p |",
+          "|---|" + "---|" * (len(ns) + 2)]
+    for tol in tols:
+        cells, walls, steps = [], [], []
+        for n in ns:
+            r = cell.get((n, tol))
+            if r is None or not r["ok"]:
+                cells.append("FAILED" if r is not None else "")
+                walls.append(math.nan)
+                steps.append(math.nan)
+                continue
+            cells.append(f"{r['error_m']:.2g} / {r['wall_s']:.3g}")
+            walls.append(r["wall_s"])
+            steps.append(r["n_steps"])
+        md.append(f"| {_tol_str(tol)} | " + " | ".join(cells) +
+                  f" | {fit_exponent(ns, walls):.2f} | {fit_exponent(ns, steps):.2f} |")
+    return md + [""]
+
+
+def rod_axis_figure(rows, out: Path) -> None:
+    pts = [r for r in rows if str(r["case"]).startswith(ROD_AXIS_PREFIX) and r["ok"]]
+    if not pts:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 5))
+    ns = sorted({_rods_of(r["case"]) for r in pts})
+    cmap = plt.get_cmap("viridis")
+    for k, n in enumerate(ns):
+        # joined in tolerance order (as the other figures): the wall time need not fall with it
+        good = sorted((r for r in pts if _rods_of(r["case"]) == n and _finite_pos(r["error_m"])
+                       and _finite_pos(r["wall_s"])), key=lambda r: -r["tol"])  # fmt: skip
+        if good:
+            ax.loglog([r["wall_s"] for r in good], [r["error_m"] for r in good], "o-", ms=4,
+                      color=cmap(k / max(1, len(ns) - 1)), label=f"n = {n}")
+    ax.set_xlabel("integrator wall time (s)")
+    ax.set_ylabel(f"final position error (m) against radau5 {ROD_AXIS_REFERENCE[1]:g}, same n")
+    ax.set_title("damped libration, radau5 (structured Newton), one orbit: rods as an axis", fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    from tetherlab.provenance import stamp_figure
+    stamp_figure(fig, "studies/workprecision.py rod_axis_cases; studies/scenes/bench-libration.toml, D = 2e4 N s")
+    fig.savefig(out / "work_precision_rods.png", dpi=110)
+    plt.close(fig)
+
+
 def stiefel_cases():
     """The Stiefel-Scheifele problem (paper 4.1), Cowell and DROMO, against the stored oracle
     (references/stiefel: heyoka binary128 and a decimal Taylor integrator agreeing to 2e-22 m).
@@ -316,7 +425,8 @@ def report_md(rows, heyoka_note: str | None, quick: bool = False) -> str:
     """The study's Markdown section: how the points were made, the figures, every row."""
     h = [r for r in rows if r["method"] == HEYOKA_METHOD]
     title = ("## Work-precision (quick: libration n = 1, 2, a quarter orbit)" if quick else
-             "## Work-precision: libration (n = 1, 2, 4), Stiefel-Scheifele (Cowell, DROMO, heyoka), one day of the de-orbit")
+             "## Work-precision: libration (n = 1, 2, 4), Stiefel-Scheifele (Cowell, DROMO, heyoka), one day of the de-orbit, "
+             "damped libration at n = 4 ... 128 (rods as an axis)")
     md = [title, "",
           "Error = largest final position distance (m) to the reference: a run with "
           f"{REFERENCE[0]} at rtol = atol = {REFERENCE[1]:g} (libration, de-orbit day), or the "
@@ -345,6 +455,9 @@ def report_md(rows, heyoka_note: str | None, quick: bool = False) -> str:
     elif heyoka_note:
         md += [f"**heyoka's points are absent:** {heyoka_note}", ""]
     md += ["![wall](work_precision_wall.png)", "", "![rhs](work_precision_rhs.png)", ""]
+    rod_md = rod_axis_tables(rows)
+    if rod_md:
+        md += rod_md + ["![rods](work_precision_rods.png)", ""]
     if h:
         md += ["![stiefel](work_precision_stiefel.png)", ""]
     md += ["| case | method | tol | error (m) | wall (s) | rhs | steps |", "|---|---|---|---|---|---|---|"]
@@ -366,8 +479,11 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="n = 1, 2 only and 0.25 orbit (a smoke run; no heyoka)")
     ap.add_argument("--no-heyoka", action="store_true", help="leave out heyoka's Stiefel points")
     ap.add_argument("--quiet", action="store_true")
+    ap.add_argument("--rods", type=int, nargs="*", default=list(ROD_AXIS_RODS),
+                    help="rod counts of the rod axis (damped libration; none: leave the axis out)")
     args = ap.parse_args(argv)
-    cases = libration_cases((1, 2), "0.25 orbits") if args.quick else libration_cases() + stiefel_cases() + deorbit_day_cases()
+    cases = (libration_cases((1, 2), "0.25 orbits") if args.quick else
+             libration_cases() + stiefel_cases() + deorbit_day_cases() + rod_axis_cases(tuple(args.rods)))
     want_heyoka = not (args.quick or args.no_heyoka)
     note = heyoka_missing(args.scheduler) if want_heyoka else None
     rows = work_precision(cases, args.out, heyoka=want_heyoka, scheduler=args.scheduler, workers=args.workers,

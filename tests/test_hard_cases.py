@@ -151,3 +151,71 @@ def test_collapse_must_be_a_clear_repeatable_error(hc, scene):
     assert "different rods" in hc.check("c", {}, crit, other_rod, scene)["reasons"][0]
     ran = good[:2] + [RunRecord("h", "l", {"case": "c", "tol": 1e-11}, True, summary(0.0))]
     assert "expected a SimulationError" in hc.check("c", {}, crit, ran, scene)["reasons"][0]
+
+
+# -- part 5: n = 512 over an orbit (issue 11) ---------------------------------------------------
+MU_EARTH = 3.986004418e14  # the "earth" preset of tetherlab/scene.py
+
+
+@pytest.fixture(scope="module")
+def scene512():
+    return load_scene(SCENES / "hard-n512.toml")
+
+
+def test_n512_scene_is_the_case_the_issue_names(scene512):
+    t = scene512.tethers[0]
+    # issue 11: "a hard case at n = 512 that must stay stable over an orbit"; damped, energy model
+    assert t.rods == 512 and t.damping_N_s == 2e4 and t.model == "energy"
+    assert scene512.duration_orbits == 1.0 and scene512.orbit.motion == "corotating"  # no special start
+    assert scene512.integrator.method == "radau5"
+
+
+def test_strain_envelope_worked_by_hand(hc, scene512):
+    # docs/verification.md 5: m0 = 1000, mf = 100, mt = 10 kg, L = 5000 m, EA = 5e4 N, r0 = 7400 km,
+    # theta0 = 30 deg.  s_c = (100*5000 + 10*2500)/1110 = 472.973 m; n^2 = mu/r0^3 = 9.83672e-7 /s^2;
+    # K_max = n^2 ((1 + sqrt3/2)^2 + 2) = 5.48205 n^2; T = K_max (1000 s_c + 0.002 s_c^2/2) = 2.55169 N
+    env = hc.strain_envelope(scene512)
+    assert env["eps_qs"] == pytest.approx(2.55169 / 5e4, rel=2e-5)
+    # sudden start: 2 K(theta0)/K_max = 2 * 3 * 0.75 / 5.48205 = 0.82086 of eps_qs
+    assert env["eps_start_overshoot"] == pytest.approx(0.82086 * env["eps_qs"], rel=1e-5)
+    # beta = 10 (L/r0 + eps_qs + 3 n^2 / w_ax^2), w_ax^2 = EA/(L mf) = 0.1 /s^2
+    n2 = MU_EARTH / 7.4e6**3
+    assert env["beta"] == pytest.approx(10 * (5000 / 7.4e6 + env["eps_qs"] + 3 * n2 / 0.1), rel=1e-12)
+    assert env["envelope"] == pytest.approx(env["eps_qs"] * (1 + env["beta"]), rel=1e-12)
+    # the same field on the local vertical (K = 3 n^2) is the attachment tension 3 n^2 m0 s_c = 1.3957 N
+    # (the convergence study's root tension is 1.39502 N: the rigid theory to 5e-4)
+    assert 3 * n2 * 1000 * 472.973 == pytest.approx(1.3957, rel=1e-4)
+
+
+def _summary512(**over):
+    s = {"strain_min": 0.0, "strain_max": 5.1e-5, "angmom_error_own": 0.01, "energy_error_own": 0.01,
+         "energy_rise_own": 0.01, "angmom_sum_scale": 2.6e7, "energy_sum_scale": 5.2e7, "n_steps": 2600.0,
+         "nonfinite": 0.0, "wall_s": 10.0}
+    return {**s, **over}
+
+
+def test_n512_stable_run_passes_and_each_part_has_teeth(hc, scene512):
+    ok = hc.n512_stability(_summary512(), None, scene512)
+    assert ok["passed"] and ok["stability"] == pytest.approx(5.1e-5 / ok["envelope"])
+    # budgets N rtol S: 2600 * 1e-9 * 2.6e7 = 67.6 (H), 2600 * 1e-9 * 5.2e7 = 135.2 (E)
+    assert ok["B_H_int_own"] == pytest.approx(67.6) and ok["B_E_int_own"] == pytest.approx(135.2)
+    over = hc.n512_stability(_summary512(strain_max=1.02 * ok["envelope"]), None, scene512)
+    assert not over["passed"] and over["stability"] == pytest.approx(1.02)
+    compressed = hc.n512_stability(_summary512(strain_min=-2 * ok["envelope"]), None, scene512)
+    assert not compressed["passed"]
+    assert not hc.n512_stability(_summary512(angmom_error_own=70.0), None, scene512)["passed"]
+    assert not hc.n512_stability(_summary512(energy_rise_own=140.0), None, scene512)["passed"]
+    # a falling energy (dissipation) is not a rise
+    assert hc.n512_stability(_summary512(energy_rise_own=-5.0, energy_error_own=5.0), None, scene512)["passed"]
+    nan = hc.n512_stability(_summary512(nonfinite=3.0), None, scene512)
+    assert not nan["passed"] and nan["stability"] == math.inf
+    stop = hc.n512_stability(None, "SimulationError: run stopped at t = 1 s: Newton failure", scene512)
+    assert not stop["passed"] and stop["stability"] == math.inf and "Newton failure" in stop["reasons"][0]
+
+
+@pytest.mark.slow
+def test_n512_negative_control_is_caught(hc, scene512):
+    # the anti-damped tether (mutants damping_sign) must fail the stability measure (it stops within
+    # 0.02 s with a collapsed rod: docs/verification.md 5)
+    c = hc.n512_negative_control(scene512)
+    assert not c["passed"] and c["stability"] > 1.0

@@ -114,3 +114,37 @@ def test_heyoka_summary_matches_the_stored_heyoka_rows(wp):
         assert err == pytest.approx(stored[tol]["final_position_error_m"], rel=rel)
         assert s["n_steps"] == pytest.approx(stored[tol]["n_steps"], rel=1e-2)
         assert s["wall_s"] > 0 and "n_rhs" not in s  # a Taylor method has no rhs evaluations
+
+
+# -- rod count as an axis (issue 11) -------------------------------------------------------------
+def test_rod_axis_cases_are_damped_libration_against_a_reference_of_the_same_n(wp):
+    cases = wp.rod_axis_cases()
+    # issue 11: "error against wall time at n = 4 ... 128"
+    assert [c.scene.tethers[0].rods for c in cases] == [4, 8, 16, 32, 64, 128]
+    for c in cases:
+        t = c.scene.tethers[0]
+        assert t.damping_N_s == 2e4  # the damped rows of tetherlab/benchmarks/cost_vs_n.py
+        assert c.reference.tethers[0].rods == t.rods  # each n is its own problem
+        # the reference: radau5 tighter than every point of the axis (studies/workprecision.py)
+        assert c.reference.integrator.method == "radau5"
+        assert c.reference.integrator.rtol < min(c.methods["radau5"])
+        assert list(c.methods) == ["radau5"] and max(c.methods["radau5"]) == 1e-5
+
+
+def test_rod_axis_table_fits_the_exponent(wp):
+    # synthetic rows: wall = 0.01 n^1.5 s, steps = 100 n (exponents 1.5 and 1 by construction)
+    rows = []
+    for n in (4, 8, 16, 32):
+        for tol in (1e-6, 1e-8):
+            rows.append({"case": f"{wp.ROD_AXIS_PREFIX}{n}", "method": "radau5", "tol": tol, "ok": True,
+                         "error_m": tol, "wall_s": 0.01 * n**1.5, "n_steps": 100.0 * n, "n_rhs": 1000.0 * n})
+    rows.append({"case": "libration n=1", "method": "dop853", "tol": 1e-6, "ok": True, "error_m": 1.0,
+                 "wall_s": 1.0, "n_steps": 1.0, "n_rhs": 1.0})  # another case: not on the rod axis
+    md = wp.rod_axis_tables(rows)
+    body = [ln for ln in md if ln.startswith("| 1e-")]
+    assert len(body) == 2
+    for ln in body:
+        cells = [c.strip() for c in ln.strip("|").split("|")]
+        assert cells[-2] == "1.50" and cells[-1] == "1.00"
+    assert wp.rod_axis_tables([rows[-1]]) == []  # no rod axis, no table
+    assert math.isnan(wp.fit_exponent([4], [1.0]))

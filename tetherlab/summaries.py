@@ -190,7 +190,8 @@ def invariants(scene) -> dict[str, float]:
 
     ``angmom_error_own`` = max_t |H(t) - H(0)| / (I n); ``energy_error_own`` = max_t |E(t) -
     E(0)| / (I n^2) (meaningful for the "energy" model, which conserves E; docs/model.md);
-    ``nonfinite`` = number of non-finite values in the outputs (must be 0).
+    ``energy_rise_own`` = max_t (E(t) - E(0)) / (I n^2) (one-sided: what a damped tether may not
+    gain); ``nonfinite`` = number of non-finite values in the outputs (must be 0).
 
     The scales that the round-off bounds of studies/hard_cases.py need, all maxima over the
     output rows: ``angmom_sum_scale`` S_H = sum of m |r| |v| over the system, taken as
@@ -214,6 +215,9 @@ def invariants(scene) -> dict[str, float]:
         "nonfinite": float(np.count_nonzero(~np.isfinite(ts.to_numpy())) + np.count_nonzero(~np.isfinite(d.to_numpy()))),
         "angmom_error_own": float(np.max(np.linalg.norm(H - H[0], axis=1)) / h_scale),
         "energy_error_own": float(np.max(np.abs(E - E[0])) / e_scale),
+        # the largest rise of E above its start: a damped energy-model tether can only lose energy
+        # (docs/model.md 6.2), so a rise beyond round-off is energy created (the n = 512 hard case)
+        "energy_rise_own": float(np.max(E - E[0]) / e_scale),
         "strain_min": float(strain.min()),
         "strain_max": float(strain.max()),
         "angmom_sum_scale": float(np.max(r_cm * np.sqrt(2.0 * mass * ke)) / h_scale),

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import re
 import sys
 import time
@@ -553,7 +554,16 @@ def _hard_cases_gates(outdir: Path) -> dict:
         "hard_cases_collapse_stop_spread": s["stop_time_spread_s"],
         # the control must exceed its bound; the gate reads bound / measured (<= 1 passes)
         "hard_cases_negative_control": (1.0 / control) if control else math.inf,
+        # issue 11: n = 512 over an orbit (part 5), and its anti-damped control (inverted likewise)
+        "hard_cases_n512_stability": s["n512_stability"] if s.get("n512_stability") is not None else math.inf,
+        "hard_cases_n512_negative_control": _inverse(s.get("n512_control_stability")),
     }
+
+
+def _inverse(v):
+    """1 / a control's measurement (its gate passes when the control fails its bound); a control
+    that did not run gives inf (fails), one that stopped (inf) gives 0."""
+    return math.inf if v is None or v == 0 else 1.0 / v
 
 
 def _rigid_bodies_gates(outdir: Path) -> dict:
@@ -598,6 +608,14 @@ STUDIES = [
 ]
 
 
+#: the studies that run their scenes through tetherlab.sweep (they take ``--workers N``)
+SWEEPING_STUDIES = ("convergence", "workprecision", "hard_cases")
+
+
+def _cores() -> int:
+    return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
+
+
 def _summary_md(name: str, sdir: Path) -> str:
     """A section for a study that writes JSON/CSV and figures but no Markdown of its own."""
     lines = []
@@ -611,9 +629,10 @@ def _summary_md(name: str, sdir: Path) -> str:
     return "\n".join(lines)
 
 
-def run_studies(out: Path, only=None):
+def run_studies(out: Path, only=None, study_workers: int | None = None):
     """Run every study into out/<name>/; a study that fails is reported (its gates then fail),
-    the others still run."""
+    the others still run.  ``study_workers``: the worker processes of the studies that sweep
+    (``--workers``; None: their default, all cores)."""
     sections, values, failures = [], {}, []
     for title, name, extra, md_name, gates_fn in STUDIES:
         if only is not None and name not in only:
@@ -622,7 +641,8 @@ def run_studies(out: Path, only=None):
         sdir.mkdir(parents=True, exist_ok=True)
         t0 = time.perf_counter()
         try:
-            _load_study(name).main([str(sdir), *extra])
+            pool = ["--workers", str(study_workers)] if study_workers and name in SWEEPING_STUDIES else []
+            _load_study(name).main([str(sdir), *extra, *pool])
             values.update(gates_fn(sdir) if gates_fn else {})
             md = (sdir / md_name).read_text() if md_name else _summary_md(name, sdir)
             # images and links in the study's Markdown are relative to its own directory
@@ -803,6 +823,13 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         by_defect.setdefault("eq20_printed_sign", []).append("hard_cases_invariant_over_bound")
         by_gate.setdefault("hard_cases_invariant_over_bound", []).append("eq20_printed_sign")
         by_gate.setdefault("hard_cases_negative_control", []).append("eq20_printed_sign")
+    # the hard-cases study runs the n = 512 tether with the damping's sign flipped (part 5): its
+    # control gate passes only if the stability measure fails under that defect
+    ctrl = study_values.get("hard_cases_n512_negative_control")
+    if ctrl is not None and ctrl <= gates["hard_cases_n512_negative_control"]["threshold"]:
+        by_defect.setdefault("damping_sign", []).append("hard_cases_n512_stability")
+        by_gate.setdefault("hard_cases_n512_stability", []).append("damping_sign")
+        by_gate.setdefault("hard_cases_n512_negative_control", []).append("damping_sign")
     # the rigid-body study runs the kernel's two attachment defects itself (part B): its control
     # gate passes only if the tip-radius measure fails under both (studies/rigid_bodies.py)
     ctrl = study_values.get("hub_spoke_radius_defects_negative_control")
@@ -892,33 +919,174 @@ RETIRED = {
 }
 
 
+# -- running the sections: in worker processes, assembled in a fixed order ------------------------
+#: measured wall time of each section alone (s, quiet 2-core machine, kernels compiled; the studies
+#: with their sweeps in one process): only the order in which sections are handed to the workers
+#: (longest first, so that none starts last on an idle pool) depends on these, never a result
+SECTION_COST_S = {
+    "study:fidelity": 255, "study:hard_cases": 210, "study:workprecision": 200, "study:convergence": 180,
+    "study:deorbit": 170, "study:rigid_bodies": 56, "controls": 55, "study:bead_vs_tmed": 50,
+    "study:stiefel_table": 34, "study:rigid_scenes": 33, "figures": 20, "check:invariants": 13,
+    "check:vertical": 12, "check:libration": 7, "check:reproducible": 5, "study:catenary": 5,
+}
+
+
+def section_tasks(only=None, no_controls=False) -> list[str]:
+    """Every section of a verify run, in the report's (canonical) order: the checks, the section
+    4.3 figures, the studies (``only`` restricts them), the negative controls."""
+    tasks = [f"check:{sid}" for sid, _t, _fn in CHECKS] + ["figures"]
+    tasks += [f"study:{name}" for _t, name, *_ in STUDIES if only is None or name in only]
+    return tasks + ([] if no_controls else ["controls"])
+
+
+def run_task(task: str, out: str, study_workers: int | None = None) -> dict:
+    """Run one section (in a worker process or in this one) and return what the report needs.
+
+    Never raises: a section that fails returns its error beside everything it computed before
+    the failure (the rows so far; a study's own files stay in its directory)."""
+    out = Path(out)
+    t0, c0 = time.perf_counter(), time.process_time()
+    res = {"task": task, "rows": [], "values": {}, "error": None}
+    try:
+        if task.startswith("check:"):
+            sid = task.split(":", 1)[1]
+            fn = next(f for s, _t, f in CHECKS if s == sid)
+            res["values"] = fn(res["rows"])
+        elif task == "figures":
+            res["figures"] = section_43_figures(out, res["rows"])
+        elif task.startswith("study:"):
+            name = task.split(":", 1)[1]
+            sections, values, failures = run_studies(out, [name], study_workers=study_workers)
+            res.update(studies=sections, values=values, failures=failures)
+        elif task == "controls":
+            gates = tomllib.loads((ROOT / "references" / "gates.toml").read_text())
+            cells, _baseline = run_negative_controls(res["rows"], gates)
+            res["cells"] = cells
+        else:
+            raise ValueError(f"task: expected check:<id>, figures, study:<name> or controls, got {task!r}")
+    except Exception as exc:  # report and go on: the other sections still run
+        import traceback
+
+        res["error"] = f"{type(exc).__name__}: {exc}"
+        res["traceback"] = traceback.format_exc()[-2000:]
+    res["wall_s"] = time.perf_counter() - t0
+    res["cpu_s"] = time.process_time() - c0  # this process only: the studies' sweeps run in it (workers=1)
+    res["pid"] = os.getpid()
+    return res
+
+
+def idle_machine_wall_s(results: dict, jobs: int) -> float:
+    """The wall time the sections would take on ``jobs`` idle cores: their CPU times handed out
+    longest-first (as run_tasks does) to the first free worker.  On a shared machine the measured
+    wall time includes the other users' load; this estimate does not (it omits the start-up of the
+    workers and a section's waiting on anything but its own CPU)."""
+    free = [0.0] * max(1, jobs)
+    for t in sorted(results, key=lambda t: -SECTION_COST_S.get(t, 1)):
+        k = free.index(min(free))
+        free[k] += results[t].get("cpu_s", math.nan)
+    return max(free)
+
+
+def run_tasks(tasks: list[str], out: Path, jobs: int, log=print) -> dict:
+    """Run the sections on ``jobs`` worker processes (1: here, one after the other); return
+    task -> result.  Sections start longest first (SECTION_COST_S); the results do not depend on
+    which worker ran them or when (each section is deterministic and writes only its own files),
+    and the caller assembles them in the canonical order.  A worker that dies takes the sections
+    it was running with it: they are retried once in a fresh pool, then reported as lost."""
+    results = {}
+    order = sorted(tasks, key=lambda t: -SECTION_COST_S.get(t, 1))
+    if jobs <= 1:
+        for t in order:
+            results[t] = run_task(t, str(out))
+            log(f"[verify] {t}: {results[t]['wall_s']:.0f} s{' FAILED' if results[t]['error'] else ''}")
+        return results
+    import concurrent.futures as cf
+    import multiprocessing
+
+    pending = list(order)
+    for attempt in (1, 2):
+        if not pending:
+            break
+        # spawn: the workers load the numba kernels from the on-disk cache (no fork of this
+        # process's threads); studies run their sweeps inside the worker (study_workers=1), so
+        # at most ``jobs`` processes compute at any time
+        pool = cf.ProcessPoolExecutor(max_workers=min(jobs, len(pending)), mp_context=multiprocessing.get_context("spawn"))
+        futures = {pool.submit(run_task, t, str(out), 1): t for t in pending}
+        lost = []
+        try:
+            for fut in cf.as_completed(futures):
+                t = futures[fut]
+                try:
+                    results[t] = fut.result()
+                    log(f"[verify] {t}: {results[t]['wall_s']:.0f} s (worker {results[t]['pid']})"
+                        f"{' FAILED: ' + results[t]['error'] if results[t]['error'] else ''}", flush=True)
+                except Exception as exc:  # noqa: BLE001 - a dead worker (BrokenProcessPool)
+                    lost.append(t)
+                    results[t] = {"task": t, "rows": [], "values": {}, "wall_s": math.nan,
+                                  "error": f"worker lost (attempt {attempt}): {type(exc).__name__}: {exc}"}
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+        pending = lost
+    return results
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--out", default=str(ROOT / "reports"))
     ap.add_argument("--only", nargs="*", help="run only these studies (names of studies/*.py)")
     ap.add_argument("--no-controls", action="store_true", help="skip the negative controls (mutation matrix)")
+    ap.add_argument("--jobs", type=int, default=min(2, _cores()),
+                    help="worker processes for the sections (default: 2, or 1 on a one-core machine)")
     args = ap.parse_args(argv)
+    if args.jobs < 1:
+        ap.error(f"--jobs: expected a positive integer, got {args.jobs}")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     gates = tomllib.loads((ROOT / "references" / "gates.toml").read_text())
     t0 = time.perf_counter()
+    tasks = section_tasks(args.only, args.no_controls)
+    results = run_tasks(tasks, out, args.jobs, log=lambda *a, **k: print(*a, **{"flush": True, **k}))
     sections = {}  # id -> (title, rows, wall)
     values = {}
-    for sid, title, fn in CHECKS:
-        rows = []
-        t1 = time.perf_counter()
-        values.update(fn(rows))
-        sections[sid] = (title, rows, time.perf_counter() - t1)
-    fig_rows = []
-    figs = section_43_figures(out, fig_rows)
-    study_sections, study_values, study_failures = run_studies(out, args.only)
+    section_failures = []
+    for sid, title, _fn in CHECKS:
+        r = results[f"check:{sid}"]
+        rows = list(r["rows"])
+        if r["error"]:
+            rows.append({"case": f"SECTION FAILED: {r['error']}"})
+            section_failures.append(f"section {sid} ({r['error']})")
+        values.update(r["values"])
+        sections[sid] = (title, rows, r["wall_s"])
+    r = results["figures"]
+    fig_rows, figs = list(r["rows"]), r.get("figures", [])
+    if r["error"]:
+        fig_rows.append({"case": f"SECTION FAILED: {r['error']}"})
+        section_failures.append(f"figures ({r['error']})")
+    study_sections, study_values, study_failures = [], {}, []
+    for t in tasks:
+        if t.startswith("study:"):
+            r = results[t]
+            if r["error"]:  # run_studies catches a study's own failure; this is a lost worker
+                name = t.split(":", 1)[1]
+                title = next(tt for tt, nm, *_ in STUDIES if nm == name)
+                study_sections.append((name, title, f"**Study failed:** `{r['error']}`", r["wall_s"]))
+                study_failures.append(name)
+                continue
+            study_sections += r["studies"]
+            study_values.update(r["values"])
+            study_failures += r["failures"]
     values.update(study_values)
 
     control_rows, cells, by_defect, by_gate = [], {}, {}, {}
     if not args.no_controls:
-        cells, _baseline = run_negative_controls(control_rows, gates)
+        r = results["controls"]
+        control_rows, cells = list(r["rows"]), r.get("cells", {})
+        if r["error"]:
+            control_rows.append({"defect": f"SECTION FAILED: {r['error']}"})
+            section_failures.append(f"negative controls ({r['error']})")
         by_defect, by_gate, mvals = mutation_summary(cells, gates, study_values)
-        values.update(mvals)
+        if not r["error"]:
+            values.update(mvals)
 
     gate_rows = []
     failed = []
@@ -932,12 +1100,21 @@ def main(argv=None) -> int:
         gate_rows.append({"gate": gid, "value": val if val is not None else "not measured",
                           "threshold": g["threshold"], "unit": g["unit"],
                           "result": "PASS" if ok else ("SKIPPED" if skipped else "FAIL")})  # fmt: skip
-    failed += [f"study {name} (crashed)" for name in study_failures]
+    failed += [f"study {name} (crashed)" for name in study_failures] + section_failures
     with open(out / "gates.csv", "w") as f:
         f.write("gate,value,threshold,unit,result\n")
         for r in gate_rows:
             f.write(f"{r['gate']},{r['value']},{r['threshold']},{r['unit']},{r['result']}\n")
+    with open(out / "sections.csv", "w") as f:  # where the time went (order and workers vary; results do not)
+        f.write("section,wall_s,cpu_s,worker_pid,result\n")
+        for t in tasks:
+            r = results[t]
+            f.write(f"{t},{r['wall_s']:.1f},{r.get('cpu_s', math.nan):.1f},{r.get('pid', '')},"
+                    f"{'FAILED' if r['error'] else 'ok'}\n")
     wall = time.perf_counter() - t0
+    cpu = sum(r.get("cpu_s", math.nan) for r in results.values())
+    print(f"sections: {cpu:.0f} s of CPU; on {args.jobs} idle core(s), longest first: about "
+          f"{idle_machine_wall_s(results, args.jobs):.0f} s (measured wall {wall:.0f} s; OUT/sections.csv)", flush=True)
 
     from . import report
     from .provenance import footer, git_commit

@@ -1,0 +1,72 @@
+"""make verify's section runner (tetherlab/verify.py: section_tasks, run_task, run_tasks).
+
+The sections run in worker processes, longest first; the report must not depend on which worker
+ran a section or when, and a section that fails must be reported with what it computed before
+failing while the others still run.  The whole verify is make verify's job; here: the task list,
+a failing section, and (slow) the same cheap sections on 1 and 2 workers giving identical values.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from tetherlab import verify
+
+
+def test_section_tasks_canonical_order():
+    tasks = verify.section_tasks()
+    checks = [f"check:{sid}" for sid, _t, _fn in verify.CHECKS]
+    studies = [f"study:{name}" for _t, name, *_ in verify.STUDIES]
+    # the report's order: checks, the section 4.3 figures, the studies, the negative controls
+    assert tasks == checks + ["figures"] + studies + ["controls"]
+    assert verify.section_tasks(only=["convergence"], no_controls=True) == checks + ["figures", "study:convergence"]
+    # every section has a cost estimate or the default (only the start order depends on them)
+    assert set(verify.SECTION_COST_S) <= set(tasks)
+
+
+def test_failing_section_is_reported_with_its_rows(monkeypatch):
+    def broken(rows):
+        rows.append({"case": "first row, computed before the failure", "value": 1.0})
+        raise RuntimeError("deliberate failure")
+
+    def fine(rows):
+        rows.append({"case": "ok"})
+        return {"vertical_equilibrium": 0.0}
+
+    monkeypatch.setattr(verify, "CHECKS", [("a", "A", broken), ("b", "B", fine)])
+    res = verify.run_tasks(["check:a", "check:b"], "unused-out-dir", jobs=1, log=lambda *a, **k: None)
+    assert res["check:a"]["error"] == "RuntimeError: deliberate failure"
+    assert res["check:a"]["rows"] == [{"case": "first row, computed before the failure", "value": 1.0}]
+    assert res["check:a"]["values"] == {}  # its gates are then "not measured": they fail
+    assert res["check:b"]["error"] is None and res["check:b"]["values"] == {"vertical_equilibrium": 0.0}
+
+
+def test_unknown_task_is_an_error_not_a_crash():
+    r = verify.run_task("nonsense", "unused-out-dir")
+    assert r["error"].startswith("ValueError: task: expected")
+
+
+@pytest.mark.slow
+def test_two_workers_give_the_serial_values(tmp_path):
+    # three cheap deterministic checks (DE421 fit, DOP853 step counts, a data check): the values
+    # must be bit-identical whether they run here one after the other or on two spawned workers
+    tasks = ["check:de421", "check:dop853", "check:stiefel-data"]
+    serial = verify.run_tasks(tasks, tmp_path / "a", jobs=1, log=lambda *a, **k: None)
+    pooled = verify.run_tasks(tasks, tmp_path / "b", jobs=2, log=lambda *a, **k: None)
+    for t in tasks:
+        assert serial[t]["error"] is None and pooled[t]["error"] is None
+        assert serial[t]["values"] == pooled[t]["values"]
+        for a, b in zip(serial[t]["rows"], pooled[t]["rows"]):
+            assert {k: v for k, v in a.items() if not (isinstance(v, float) and math.isnan(v))} == {
+                k: v for k, v in b.items() if not (isinstance(v, float) and math.isnan(v))}
+
+
+def test_idle_machine_estimate_hands_out_longest_first():
+    # costs 5 (fidelity), 4 (hard cases), 3 (work-precision) by SECTION_COST_S order; two cores:
+    # worker A takes 5, worker B 4, then B (free first, at 4) takes 3 -> max(5, 7) = 7
+    res = {"study:fidelity": {"cpu_s": 5.0}, "study:hard_cases": {"cpu_s": 4.0},
+           "study:workprecision": {"cpu_s": 3.0}}
+    assert verify.idle_machine_wall_s(res, 2) == 7.0
+    assert verify.idle_machine_wall_s(res, 1) == 12.0
