@@ -3,24 +3,18 @@ study's grid (issue 11: n = 256 for the three quantities).  The study itself run
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 
 import pytest
 
-from tests.helpers import ROOT
+from tests.helpers import ROOT, forget_study, import_study
 from tetherlab.sweep import RunRecord, load_study
 
 
 @pytest.fixture(scope="module")
 def conv():
-    spec = importlib.util.spec_from_file_location("tetherlab_study_convergence", ROOT / "studies" / "convergence.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    yield mod
-    sys.modules.pop(spec.name, None)
+    yield import_study("convergence")
+    forget_study("convergence")
 
 
 def test_grid_reaches_256_where_affordable():

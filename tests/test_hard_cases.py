@@ -9,13 +9,11 @@ docstring; the numbers below are worked by hand from them.  The study itself run
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 
 import pytest
 
-from tests.helpers import ROOT, SCENES
+from tests.helpers import SCENES, forget_study, import_study
 from tetherlab.scene import load_scene
 from tetherlab.summaries import event_code
 from tetherlab.sweep import RunRecord
@@ -25,12 +23,8 @@ U = 2.0**-53
 
 @pytest.fixture(scope="module")
 def hc():
-    spec = importlib.util.spec_from_file_location("tetherlab_study_hard_cases", ROOT / "studies" / "hard_cases.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    yield mod
-    sys.modules.pop(spec.name, None)
+    yield import_study("hard_cases")
+    forget_study("hard_cases")
 
 
 @pytest.fixture(scope="module")

@@ -366,6 +366,13 @@ def _sub_qsq(s, f, tmp):
 
 
 @njit(cache=True)
+def _tether_span(p, offt, k):
+    """(rods, first global rod, offset of the joint it hangs from) of tether k."""
+    tb = offt + k * TT_SIZE
+    return int(p[tb + TT_NRODS]), int(p[tb + TT_ROD0]), _parent_joint(p, offt, k)
+
+
+@njit(cache=True)
 def solve(p, blk, g, fac, m1, b):
     """Solve (g I - J) z = b in place for the second-order structure, J = [[0, I], [A_q, A_v]]
     replaced by the structured E of the module docstring:
@@ -388,10 +395,7 @@ def solve(p, blk, g, fac, m1, b):
         xq[c] = b[c]
     for j in range(nteth - 1, -1, -1):
         k = int(p[offo + j])
-        tb = offt + k * TT_SIZE
-        n = int(p[tb + TT_NRODS])
-        g0 = int(p[tb + TT_ROD0])
-        pa = _parent_joint(p, offt, k)
+        n, g0, pa = _tether_span(p, offt, k)
         for i in range(n):
             gr = g0 + i
             o = 3 + 3 * gr
@@ -422,11 +426,8 @@ def solve(p, blk, g, fac, m1, b):
     for c in range(3):
         s[c] = m0 * xm[c] if free_root else xv[c]
     for k in range(nteth):
-        tb = offt + k * TT_SIZE
-        n = int(p[tb + TT_NRODS])
-        g0 = int(p[tb + TT_ROD0])
-        mf = p[tb + TT_TIP_M]
-        pa = _parent_joint(p, offt, k)
+        n, g0, pa = _tether_span(p, offt, k)
+        mf = p[offt + k * TT_SIZE + TT_TIP_M]
         for i in range(n):
             gr = g0 + i
             bl = blk[gr]
@@ -449,13 +450,10 @@ def solve(p, blk, g, fac, m1, b):
     # forward elimination of the right-hand side, leaves first (tip -> parent joint)
     for j in range(nteth):
         k = int(p[offo + j])
-        tb = offt + k * TT_SIZE
-        n = int(p[tb + TT_NRODS])
-        g0 = int(p[tb + TT_ROD0])
+        n, g0, pa = _tether_span(p, offt, k)
         for i in range(n - 2, -1, -1):
             gr = g0 + i
             _sub_q_sinv_y(s, 3 + 3 * gr, fac[gr + 1], s, 3 + 3 * (gr + 1))
-        pa = _parent_joint(p, offt, k)
         if pa > 0 or free_root:
             _sub_q_sinv_y(s, pa, fac[g0], s, 3 + 3 * g0)
     fr = fac[nrods]
@@ -465,10 +463,7 @@ def solve(p, blk, g, fac, m1, b):
     # back substitution, parents before children: w_j = S_j^-1 (y_j - Q_j w_{j-1})
     for j in range(nteth - 1, -1, -1):
         k = int(p[offo + j])
-        tb = offt + k * TT_SIZE
-        n = int(p[tb + TT_NRODS])
-        g0 = int(p[tb + TT_ROD0])
-        pa = _parent_joint(p, offt, k)
+        n, g0, pa = _tether_span(p, offt, k)
         for i in range(n):
             gr = g0 + i
             f = fac[gr]
@@ -483,10 +478,7 @@ def solve(p, blk, g, fac, m1, b):
     for c in range(3):
         b[m1 + c] = xv[c]
     for k in range(nteth):
-        tb = offt + k * TT_SIZE
-        n = int(p[tb + TT_NRODS])
-        g0 = int(p[tb + TT_ROD0])
-        pa = _parent_joint(p, offt, k)
+        n, g0, pa = _tether_span(p, offt, k)
         for i in range(n):
             gr = g0 + i
             oa = pa if i == 0 else 3 * gr
