@@ -111,6 +111,11 @@ STRUCT_JAC_EVERY_STEP = 2
 #: Newton iterations allowed with the structured matrix (an iteration costs 3 rhs calls and two
 #: O(n) solves; docs/integrators.md section 7: 7, 10, 14 measured, 10 kept).
 NIT_STRUCT = 10
+#: A stalled Newton iteration (rate >= 0.99, or a predicted miss of the iteration limit) whose
+#: increment is within this factor of the round-off floor (:func:`_increment_noise`) is taken as
+#: converged: the three stages' noise enters each transformed increment through rows of T^-1 of
+#: norm ~4.4, and the floor is one realisation of it (docs/integrators.md section 12).
+FLOOR_GAIN = 10.0
 
 # Workspace scalar slots (float fs[], int is_[]).
 _F_HOLD = 0
@@ -122,6 +127,7 @@ _F_HLU = 5
 _F_THSTEP = 6  # Newton-rate step cap target (0: off, Hairer's controller alone); set by the workspace
 _F_JACEVERY = 7  # > 0: a fresh Jacobian on every step (set by the workspace; structured default)
 _F_NIT = 8  # max Newton iterations (0: NIT); set by the workspace
+_F_FLOOR = 9  # FLOOR_GAIN (0: a stalled Newton iteration is always a failure); set by the workspace
 _I_FIRST = 0
 _I_NEED_JAC = 1
 _I_LU_VALID = 2
@@ -176,6 +182,7 @@ def radau5_workspace(n, m1=0, p=None):
     ws[7][_F_THSTEP] = THETA_STEP
     ws[7][_F_NIT] = NIT_STRUCT if structured else NIT
     ws[7][_F_JACEVERY] = float(STRUCT_JAC_EVERY_STEP) if structured else 0.0
+    ws[7][_F_FLOOR] = FLOOR_GAIN
     return ws
 
 
@@ -350,6 +357,30 @@ def _lin(struct, e, ip, fjac, g, m1, b, p, blk, sfac):
 
 
 @njit(cache=True)
+def _increment_noise(rhs, t, y, f0, p, scal, tmp, out, struct, e1, ip1, fjac, fac1, m1, blk, sfac1, stats):
+    """RMS (tolerance units) of the change of the real Newton system's solution when y moves by
+    one rounding unit: the floor below which the increments of the simplified Newton iteration
+    are round-off (docs/integrators.md section 12).  One rhs call and one linear solve."""
+    n = y.size
+    for i in range(n):
+        # a fixed +-1 pattern, so the floor is reproducible (restarts stay bit for bit)
+        sgn = 1.0 if (i * 40503) % 7 < 4 else -1.0
+        tmp[i] = y[i] + sgn * EPS * abs(y[i])
+    st = rhs(t, ptr(tmp), ptr(out), ptr(p))
+    stats[ST_NRHS] += 1
+    if st != 0:
+        return 0.0
+    for i in range(n):
+        out[i] -= f0[i]
+    _lin(struct, e1, ip1, fjac, fac1, m1, out, p, blk, sfac1)
+    acc = 0.0
+    for i in range(n):
+        acc += scaled_sq(out[i], scal[i])
+    r = np.sqrt(acc / n)
+    return r if np.isfinite(r) else 0.0
+
+
+@njit(cache=True)
 def radau5_core(
     rhs,
     t,
@@ -403,6 +434,7 @@ def radau5_core(
     nit = int(fs[_F_NIT]) if fs[_F_NIT] > 0.0 else NIT
     jac_every = fs[_F_JACEVERY] > 0.0
     jac_mid = fs[_F_JACEVERY] > 1.0
+    floor_gain = fs[_F_FLOOR]
 
     # Hairer's tolerance map (RADAU5 driver, EXPM = 2/3), and Newton's stopping tolerance FNEWT.
     rtol_i = 0.1 * rtol ** (2.0 / 3.0)
@@ -419,6 +451,7 @@ def radau5_core(
     f3 = np.empty(n)
     tmp = np.empty(n)
     scal = np.empty(n)
+    wnoise = np.empty(n)
     w = np.empty(n, dtype=np.complex128)
     evc = np.zeros((4, n))
     st, gold, gnew, gtmp = start_events(event, t, y, p, ne, ev, stats)
@@ -580,6 +613,8 @@ def radau5_core(
         thqold = 0.0
         fail = 0  # 0 ok, RHS_FAILED / NON_FINITE, 10 = Newton failure, 11 = Newton too slow
         hhfac = 1.0
+        noise = -1.0  # the Newton increments' round-off floor at this step (computed on demand)
+        at_floor = False
         while True:
             if newt >= nit:
                 fail = 10
@@ -639,17 +674,31 @@ def radau5_core(
                 else:
                     theta = np.sqrt(thq * thqold)
                 thqold = thq
+                stalled = False
                 if theta < 0.99:
                     faccon = theta / (1.0 - theta)
                     dyth = faccon * dyno * theta ** (nit - 1 - newt) / fnewt
                     if dyth >= 1.0 and not fixed_step:
                         qnewt = max(1e-4, min(20.0, dyth))
                         hhfac = 0.8 * qnewt ** (-1.0 / (4.0 + nit - 1 - newt))
+                        stalled = True
                         fail = 11
-                        break
                 else:
+                    stalled = True
                     fail = 10
-                    break
+                if stalled:
+                    # Increments that stopped shrinking may have reached the round-off of the
+                    # stage values themselves, which no smaller step lowers (docs/integrators.md
+                    # section 12): then the iterate is as converged as double precision allows.
+                    if floor_gain > 0.0:
+                        if noise < 0.0:
+                            noise = _increment_noise(rhs, t, y, f0, p, scal, tmp, wnoise, struct, e1,
+                                                     ip1, fjac, fac1, m1, blk, sfac1, stats)  # fmt: skip
+                        if dyno <= floor_gain * noise:
+                            fail = 0
+                            at_floor = True
+                    if not at_floor:
+                        break
             dynold = max(dyno, EPS)
             for i in range(n):
                 f1i = f1[i] + z1[i]
@@ -661,7 +710,7 @@ def radau5_core(
                 z1[i] = T11 * f1i + T12 * f2i + T13 * f3i
                 z2[i] = T21 * f1i + T22 * f2i + T23 * f3i
                 z3[i] = T31 * f1i + f2i
-            if faccon * dyno <= fnewt:
+            if faccon * dyno <= fnewt or at_floor:
                 break
 
         if fail != 0:
@@ -830,8 +879,9 @@ def radau5_core(
                     hnew = h / quot
                 hacc = h
                 erracc = max(1e-2, err)
-                if newt >= 2 and fresh_jac and thstep > 0.0:
+                if newt >= 2 and fresh_jac and thstep > 0.0 and not at_floor:
                     # Newton-rate cap (THETA_STEP): a fresh Jacobian's rate grows like h^2 here
+                    # (not after an iteration stopped at its round-off floor: its rate is noise)
                     hnew = min(hnew, h * np.sqrt(thstep / theta))
             hold = h
             t = xph
@@ -927,6 +977,7 @@ def radau5_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stat
     fs = np.zeros(12)
     fs[_F_THSTEP] = THETA_STEP
     fs[_F_NIT] = NIT
+    fs[_F_FLOOR] = FLOOR_GAIN
     is_ = np.zeros(8, dtype=np.int64)
     ev = np.array([0.0, -1.0, -1.0, 0.0])
     blk = np.zeros((1, _nw.BLK_SIZE))
