@@ -247,7 +247,8 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     ``newton`` (RADAU5): "structured" uses the O(n) Newton matrix of a tether state
     (tetherlab/tether/newton.py: analytic rod blocks, block-Thomas solve), "dense" the
     finite-difference Jacobian and dense LU, "auto" the structured one whenever the state is one it
-    understands (Cowell, second order, no other components); ``stats["newton_matrix"]`` says which
+    understands (Cowell, second order; with rigid bodies under one root the bordered matrix, from
+    24 rods on); ``stats["newton_matrix"]`` says which
     was used and, for "dense" under "auto", why.
     Never raises for a failure of the integration itself: that is
     reported in the result's ``status``/``message``, with every output computed before it.
@@ -415,6 +416,8 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
 
 #: "auto" takes the structured Newton matrix from this many rods on (see _newton_choice)
 AUTO_STRUCTURED_MIN_RODS = 4
+#: ... and with rigid bodies (the bordered matrix) from this many rods on
+AUTO_BORDERED_MIN_RODS = 24
 
 
 def _newton_choice(method, newton, p, n, second_order):
@@ -428,10 +431,12 @@ def _newton_choice(method, newton, p, n, second_order):
     from ..tether.newton import structure_supported
 
     why = structure_supported(p, n, second_order)
-    if not why and newton == "auto" and int(p[H_NRIGID]) > 0:
-        # The bordered matrix (docs/integrators.md section 13) is available on request; "auto"
-        # keeps the dense path for rigid bodies (measured in section 13)
-        why = "rigid bodies: 'auto' keeps the dense path (newton='structured' forces the bordered matrix)"
+    if not why and newton == "auto" and int(p[H_NRIGID]) > 0 and int(p[H_NRODS]) < AUTO_BORDERED_MIN_RODS:
+        # The bordered matrix (rigid bodies, docs/integrators.md section 13) pays for its ~4 rhs
+        # calls per border unknown and step from about 24 rods on: measured slower at 16 rods on
+        # rigid-example (1.4x), faster at 24, 32, 64, 128 on it and on deorbit-ed-rigid.
+        why = (f"rigid bodies with {int(p[H_NRODS])} rods, fewer than {AUTO_BORDERED_MIN_RODS}: the dense "
+               "path is as cheap (newton='structured' forces the bordered matrix)")  # fmt: skip
     if not why and newton == "auto" and int(p[H_NRODS]) < AUTO_STRUCTURED_MIN_RODS:
         # Below a few rods the dense path costs no more (measured at n = 2: 3.1 s dense against
         # 2.9 s structured on bench-libration) and keeps the full finite-difference Jacobian, whose
