@@ -151,7 +151,10 @@ def radau5_workspace(n, m1=0, p=None):
     With ``p`` (a tether model's parameter block, Cowell layout, ``m1 = n/2``) the Newton matrix
     is the structured one of :mod:`tetherlab.tether.newton` (analytic rod blocks, block-Thomas
     factorisation and solve, O(n) per step) and no dense n x n array is allocated; the caller
-    checks :func:`tetherlab.tether.newton.structure_supported` first.
+    checks :func:`tetherlab.tether.newton.structure_supported` first.  With rigid bodies
+    (n > 2 m1: their attitude and wheel states w appended) the structured solve is bordered by the
+    n - 2 m1 unknowns w and completed by a Schur complement on them (docs/integrators.md section
+    13; the workspace's last element, a tuple of arrays).
 
     ``m1 > 0`` declares Hairer's special structure (RADAU5's M1 = M2): the first m1 components have
     the next m1 as their exact derivatives (y = [q, v, w], q' = v, as in Cowell's formulation; w:
@@ -720,8 +723,13 @@ def radau5_core(
                     st = -1
                 elif nb > 0:
                     # the border: f at the same base state and its nb columns (section 13)
-                    fs[_F_TBASE] = tb
                     st = _border_jacobian(rhs, tb, tmp, p, m1, nb, bcol, bw, stats)
+                    if st != 0 and tb != t:
+                        # the model failed at the extrapolated mid-step state: the border at
+                        # (t, y) instead (an approximate matrix changes the rate, not the result)
+                        tb = t
+                        st = _border_jacobian(rhs, tb, y, p, m1, nb, bcol, bw, stats)
+                    fs[_F_TBASE] = tb
             else:
                 st = _jacobian(rhs, t, y, f0, p, fjac, tmp, stats)
             if st != 0:
