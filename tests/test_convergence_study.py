@@ -23,7 +23,7 @@ def test_grid_reaches_256():
     study = load_study(ROOT / "studies" / "convergence.toml")
     assert int(study.options["max_rods"]) == 256
     top = {case.id: max(case.grid["tethers.main.rods"]) for case in study.cases}
-    assert top == {"tension": 256, "libration": 256, "lateral": 256}
+    assert top == {"tension": 256, "libration": 256, "lateral": 256, "lateral_equilibrium": 256}
     lateral = next(c for c in study.cases if c.id == "lateral")
     assert "orbit.motion" not in lateral.set  # the scene's own (corotating) start: no special start
 
