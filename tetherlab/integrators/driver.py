@@ -248,7 +248,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     (tetherlab/tether/newton.py: analytic rod blocks, block-Thomas solve), "dense" the
     finite-difference Jacobian and dense LU, "auto" the structured one whenever the state is one it
     understands (Cowell, second order; with rigid bodies under one root the bordered matrix, from
-    24 rods on); ``stats["newton_matrix"]`` says which
+    32 rods on); ``stats["newton_matrix"]`` says which
     was used and, for "dense" under "auto", why.
     Never raises for a failure of the integration itself: that is
     reported in the result's ``status``/``message``, with every output computed before it.
@@ -417,7 +417,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
 #: "auto" takes the structured Newton matrix from this many rods on (see _newton_choice)
 AUTO_STRUCTURED_MIN_RODS = 4
 #: ... and with rigid bodies (the bordered matrix) from this many rods on
-AUTO_BORDERED_MIN_RODS = 24
+AUTO_BORDERED_MIN_RODS = 32
 
 
 def _newton_choice(method, newton, p, n, second_order):
@@ -433,8 +433,9 @@ def _newton_choice(method, newton, p, n, second_order):
     why = structure_supported(p, n, second_order)
     if not why and newton == "auto" and int(p[H_NRIGID]) > 0 and int(p[H_NRODS]) < AUTO_BORDERED_MIN_RODS:
         # The bordered matrix (rigid bodies, docs/integrators.md section 13) pays for its ~4 rhs
-        # calls per border unknown and step from about 24 rods on: measured slower at 16 rods on
-        # rigid-example (1.4x), faster at 24, 32, 64, 128 on it and on deorbit-ed-rigid.
+        # calls per border unknown and step from a few tens of rods on: measured slower at 16 rods
+        # on rigid-example (1.4x), within the timing noise at 24 (1.2x faster), 2x or more faster
+        # at 32, 64 and 128 on it and on deorbit-ed-rigid.
         why = (f"rigid bodies with {int(p[H_NRODS])} rods, fewer than {AUTO_BORDERED_MIN_RODS}: the dense "
                "path is as cheap (newton='structured' forces the bordered matrix)")  # fmt: skip
     if not why and newton == "auto" and int(p[H_NRODS]) < AUTO_STRUCTURED_MIN_RODS:
