@@ -150,6 +150,8 @@ EXTRA_SECTIONS = (
                      "quasi-static start, rtol 1e-8 (issue 11; targets n = 16 <= 60 s, n = 64 <= 5 min)"),
     ("cost_vs_n", "Cost per simulated orbit against the rod count, bench-libration rtol 1e-8, "
                   "damped and undamped; last rows: fitted exponents (issue 11)"),
+    ("rigid_newton", "RADAU5 with a rigid body: dense against the bordered structured Newton matrix, per simulated "
+                     "second against the rod count; last rows: fitted exponents (issue 11, docs/integrators.md 13)"),
     ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity (issue 13)"),
     ("igrf", "IGRF-14 field: cost of one evaluation against the degree (issue 13)"),
     ("rigid", "Right-hand-side cost: rigid root + 3 wheels + 4 tethers against the point-mass hub (issue 10)"),

@@ -39,7 +39,7 @@ from .common import (
 )
 from .erk import KINDS, erk_core
 from .radau5 import radau5_core, radau5_workspace
-from ..kernel.layout import H_NRODS
+from ..kernel.layout import H_NRIGID, H_NRODS
 
 NATIVE_METHODS = ("dop853", "vern9", "radau5")
 SCIPY_METHODS = ("scipy:DOP853", "scipy:Radau", "scipy:LSODA", "scipy:BDF", "scipy:RK45")
@@ -247,7 +247,8 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     ``newton`` (RADAU5): "structured" uses the O(n) Newton matrix of a tether state
     (tetherlab/tether/newton.py: analytic rod blocks, block-Thomas solve), "dense" the
     finite-difference Jacobian and dense LU, "auto" the structured one whenever the state is one it
-    understands (Cowell, second order, no other components); ``stats["newton_matrix"]`` says which
+    understands (Cowell, second order; with rigid bodies under one root the bordered matrix, from
+    32 rods on); ``stats["newton_matrix"]`` says which
     was used and, for "dense" under "auto", why.
     Never raises for a failure of the integration itself: that is
     reported in the result's ``status``/``message``, with every output computed before it.
@@ -291,8 +292,9 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         m1 = int(second_order)  # y = [q (m1), v (m1), first-order rest]: the state-layout descriptor's NQT
     else:
         raise ValueError(f"second_order: expected a bool or an integer M1 with 0 <= 2 M1 <= n = {n}; got {second_order!r}")
-    # the structured Newton matrix knows y = [q, q'] only (no first-order block appended)
-    newton_kind, p_struct = _newton_choice(method, newton, p, n, m1 > 0 and 2 * m1 == n)
+    # the structured Newton matrix: y = [q, q'], or y = [q, q', w] with rigid bodies' attitude and
+    # wheels as the border (docs/integrators.md section 13)
+    newton_kind, p_struct = _newton_choice(method, newton, p, n, (True if 2 * m1 == n else m1) if m1 > 0 else False)
 
     def new_ws():
         return radau5_workspace(n, m1, p_struct) if method == "radau5" else ()
@@ -316,7 +318,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         stats[:] = restart["stats"]
         ev[:] = restart["ev"]
         resume = bool(restart["resume"])
-        for a, b in zip(ws, restart["ws"]):
+        for a, b in zip(_ws_arrays(ws), restart["ws"]):
             a[...] = b
         events = [tuple(e) for e in restart["events"]]
         events = [(float(a), int(b), int(c)) for a, b, c in events]
@@ -414,6 +416,8 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
 
 #: "auto" takes the structured Newton matrix from this many rods on (see _newton_choice)
 AUTO_STRUCTURED_MIN_RODS = 4
+#: ... and with rigid bodies (the bordered matrix) from this many rods on
+AUTO_BORDERED_MIN_RODS = 32
 
 
 def _newton_choice(method, newton, p, n, second_order):
@@ -427,6 +431,13 @@ def _newton_choice(method, newton, p, n, second_order):
     from ..tether.newton import structure_supported
 
     why = structure_supported(p, n, second_order)
+    if not why and newton == "auto" and int(p[H_NRIGID]) > 0 and int(p[H_NRODS]) < AUTO_BORDERED_MIN_RODS:
+        # The bordered matrix (rigid bodies, docs/integrators.md section 13) pays for its ~4 rhs
+        # calls per border unknown and step from a few tens of rods on: measured slower at 16 rods
+        # on rigid-example (1.4x), within the timing noise at 24 (1.2x faster), 2x or more faster
+        # at 32, 64 and 128 on it and on deorbit-ed-rigid.
+        why = (f"rigid bodies with {int(p[H_NRODS])} rods, fewer than {AUTO_BORDERED_MIN_RODS}: the dense "
+               "path is as cheap (newton='structured' forces the bordered matrix)")  # fmt: skip
     if not why and newton == "auto" and int(p[H_NRODS]) < AUTO_STRUCTURED_MIN_RODS:
         # Below a few rods the dense path costs no more (measured at n = 2: 3.1 s dense against
         # 2.9 s structured on bench-libration) and keeps the full finite-difference Jacobian, whose
@@ -439,12 +450,20 @@ def _newton_choice(method, newton, p, n, second_order):
     if newton == "structured":
         raise ValueError(f"newton: 'structured' is not available for this state: {why}")
     return f"dense ({why})", None
+def _ws_arrays(ws):
+    """The workspace's arrays in order, the border's tuple (radau5_workspace) expanded."""
+    out = []
+    for a in ws:
+        out.extend(a if isinstance(a, tuple) else (a,))
+    return out
+
+
 def _loop_state(t, y, h, done, budget, stats, ev, ws, resume, events) -> dict:
     """Everything :func:`integrate`'s loop carries between kernel calls (copies), for
     ``checkpoint``/``restart``: with ``p`` it determines the rest of the run."""
     return {
         "t": float(t), "h": float(h), "done": int(done), "budget": int(budget), "y": y.copy(),
-        "stats": stats.copy(), "ev": ev.copy(), "ws": [a.copy() for a in ws], "resume": bool(resume),
+        "stats": stats.copy(), "ev": ev.copy(), "ws": [a.copy() for a in _ws_arrays(ws)], "resume": bool(resume),
         "events": [tuple(e) for e in events],
     }  # fmt: skip
 

@@ -136,6 +136,13 @@ _I_NSING = 4
 _I_STARTED = 5
 _I_M1 = 6  # second-order structure: y'_i = y_{i+M1} for i < M1 (0 = none), set by the workspace
 _I_STRUCT = 7  # 1: structured Newton matrix of a tether state (tether/newton.py), O(n) per step
+_I_NBORDER = 8  # structured: number of first-order unknowns w bordering it (n - 2 m1; section 13)
+_F_TBASE = 10  # structured with a border: time of the border's base state
+#: rows of the border's float work array: base state y_J, f(t_J, y_J), then scratch
+_B_Y, _B_F, _B_YT, _B_FT, _B_XR, _B_XI, _B_OR, _B_OI = 0, 1, 2, 3, 4, 5, 6, 7
+_B_ROWS = 8
+#: relative increment of the border's directional differences (forward: sqrt(eps))
+_SQRT_EPS = float(np.sqrt(EPS))
 
 
 def radau5_workspace(n, m1=0, p=None):
@@ -144,7 +151,10 @@ def radau5_workspace(n, m1=0, p=None):
     With ``p`` (a tether model's parameter block, Cowell layout, ``m1 = n/2``) the Newton matrix
     is the structured one of :mod:`tetherlab.tether.newton` (analytic rod blocks, block-Thomas
     factorisation and solve, O(n) per step) and no dense n x n array is allocated; the caller
-    checks :func:`tetherlab.tether.newton.structure_supported` first.
+    checks :func:`tetherlab.tether.newton.structure_supported` first.  With rigid bodies
+    (n > 2 m1: their attitude and wheel states w appended) the structured solve is bordered by the
+    n - 2 m1 unknowns w and completed by a Schur complement on them (docs/integrators.md section
+    13; the workspace's last element, a tuple of arrays).
 
     ``m1 > 0`` declares Hairer's special structure (RADAU5's M1 = M2): the first m1 components have
     the next m1 as their exact derivatives (y = [q, v, w], q' = v, as in Cowell's formulation; w:
@@ -156,8 +166,10 @@ def radau5_workspace(n, m1=0, p=None):
     if m1 < 0 or 2 * m1 > n:
         raise ValueError(f"m1: expected 0 <= m1 <= n/2 = {n / 2:g} (second-order structure); got {m1}")
     structured = p is not None
-    if structured and (m1 == 0 or 2 * m1 != n or _nw.structure_supported(p, n, True)):
-        raise ValueError("p: the structured Newton matrix needs a Cowell tether state with m1 = n/2")
+    if structured and (m1 == 0 or _nw.structure_supported(p, n, True if 2 * m1 == n else m1)):
+        raise ValueError("p: the structured Newton matrix needs a Cowell tether state with m1 = 3 + 3 rods "
+                         "(and n - 2 m1 attitude and wheel components when bodies are rigid)")
+    nb = n - 2 * m1 if structured else 0  # border unknowns (docs/integrators.md section 13)
     ne = 1 if structured else n - m1
     nd = 1 if structured else n
     blk, sf1, sf2 = _nw.workspace(p) if structured else (
@@ -172,13 +184,25 @@ def radau5_workspace(n, m1=0, p=None):
         np.zeros((4, n)),  # cont: y_new and the 3 coefficients of the collocation polynomial
         np.zeros(n),  # f0 = f(t, y)
         np.zeros(12),  # float scalars
-        np.zeros(8, dtype=np.int64),  # int scalars
+        np.zeros(10, dtype=np.int64),  # int scalars
         blk,  # structured: rod blocks (tether/newton.py)
         sf1,  # structured: real factors
         sf2,  # structured: complex factors
+        # the border (docs/integrators.md section 13), one tuple: a kernel call of more than 30
+        # arguments is compiled by CPython as f(*args), and numba warns on the tuple of a
+        # first-class function that this builds
+        (np.zeros((n, max(nb, 1))),  # border: finite-difference columns of J for the w unknowns
+        np.zeros((max(nb, 1), n)),  # border: z^j = S_t(0, A_w e_j), real shift
+        np.zeros((max(nb, 1), n), dtype=np.complex128),  # border: the same, complex shift
+        np.zeros((max(nb, 1), max(nb, 1))),  # border: LU of Sigma, real
+        np.zeros((max(nb, 1), max(nb, 1)), dtype=np.complex128),  # border: LU of Sigma, complex
+        np.zeros(max(nb, 1), dtype=np.int64),  # border: pivots, real
+        np.zeros(max(nb, 1), dtype=np.int64),  # border: pivots, complex
+        np.zeros((_B_ROWS, n))),  # border: base state, f there, scratch (rows _B_*)
     )
     ws[8][_I_M1] = m1
     ws[8][_I_STRUCT] = 1 if structured else 0
+    ws[8][_I_NBORDER] = nb
     ws[7][_F_THSTEP] = THETA_STEP
     ws[7][_F_NIT] = NIT_STRUCT if structured else NIT
     ws[7][_F_JACEVERY] = float(STRUCT_JAC_EVERY_STEP) if structured else 0.0
@@ -348,16 +372,171 @@ def _solve(e, ip, fjac, g, m1, b):
 
 
 @njit(cache=True)
-def _lin(struct, e, ip, fjac, g, m1, b, p, blk, sfac):
-    """(g I - J) x = b in place: the structured solve, or the dense factors' one."""
+def _lin(struct, e, ip, fjac, g, m1, b, p, blk, sfac, rhs, nb, bz, bs, bp, bw, tb, iu, stats):
+    """(g I - J) x = b in place: the structured solve (bordered when nb > 0), or the dense
+    factors' one.  ``iu``: 0.0 for the real system, 1j for the complex one (typed like b)."""
     if struct:
         _nw.solve(p, blk, g, sfac, m1, b)
+        if nb > 0:
+            _border_solve(rhs, tb, p, m1, nb, b, bz, bs, bp, bw, iu, stats)
     else:
         _solve(e, ip, fjac, g, m1, b)
 
 
+# --------------------------------------------------------------------------------------------
+# The border of the structured matrix: rigid bodies' attitude and wheel unknowns w
+# (docs/integrators.md section 13).  With y = [q, v, w] the Newton system (g I - J) z = b is
+#     [ E_tt     -A_w   ] [z_v]   [b_v + A_q b_q/g]
+#     [ -B_qv   g - B_w ] [z_w] = [b_w + B_q b_q/g],   z_q = (b_q + z_v)/g,
+# B_qv x = B_q x_q + B_v x_v.  E_tt is the tether solve S_t of tether/newton.py (bodies as point
+# masses of their translational mass at their joints).  Schur complement on the few w:
+#     z0 = S_t(b_q, b_v),  z^j = S_t(0, A_w e_j),  Sigma = g - B_w - [B_qv z^j]_j,
+#     z_w = Sigma^-1 (b_w + B_qv z0),  (z_q, z_v) = z0 + sum_j z_w,j z^j.
+# --------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _increment_noise(rhs, t, y, f0, p, scal, tmp, out, struct, e1, ip1, fjac, fac1, m1, blk, sfac1, stats):
+def _border_jacobian(rhs, t, ybase, p, m1, nb, bcol, bw, stats):
+    """Base of the border at (t, ybase): f there, and the nb finite-difference columns of J for
+    the w unknowns (rows: A_w and B_w; Hairer's increments sqrt(eps max(1e-5, |y_j|))).  nb + 1
+    rhs calls.  Returns 0, an rhs status or -1 (non-finite)."""
+    n = ybase.shape[0]
+    yb = bw[_B_Y]
+    fb = bw[_B_F]
+    yt = bw[_B_YT]
+    ft = bw[_B_FT]
+    for i in range(n):
+        yb[i] = ybase[i]
+        yt[i] = ybase[i]
+    st = rhs(t, row_ptr(bw, _B_Y), row_ptr(bw, _B_F), ptr(p))
+    stats[ST_NRHS] += 1
+    if st != 0:
+        return st
+    if not all_finite(fb):
+        return -1
+    n2 = 2 * m1
+    for j in range(nb):
+        c = n2 + j
+        delt = np.sqrt(EPS * max(1e-5, abs(yb[c])))
+        yt[c] = yb[c] + delt
+        st = rhs(t, row_ptr(bw, _B_YT), row_ptr(bw, _B_FT), ptr(p))
+        stats[ST_NRHS] += 1
+        if st != 0:
+            delt = -delt
+            yt[c] = yb[c] + delt
+            st = rhs(t, row_ptr(bw, _B_YT), row_ptr(bw, _B_FT), ptr(p))
+            stats[ST_NRHS] += 1
+        yt[c] = yb[c]
+        if st != 0:
+            return st
+        for i in range(n):
+            bcol[i, j] = (ft[i] - fb[i]) / delt
+        if not all_finite(bcol[:, j]):
+            return -1
+    return 0
+
+
+@njit(cache=True)
+def _border_dir(rhs, t, p, m1, nb, bw, rx, ro, stats):
+    """bw[ro, :nb] = B_qv x for the real direction x = bw[rx, :2 m1] (a forward difference of w'
+    along x from the border's base; increment sqrt(eps) in the norm max_i |x_i| / max(1, |y_i|)).
+    One rhs call (two if the model fails forward); a failed or non-finite difference gives 0."""
+    n = bw.shape[1]
+    n2 = 2 * m1
+    yb = bw[_B_Y]
+    fb = bw[_B_F]
+    yt = bw[_B_YT]
+    ft = bw[_B_FT]
+    x = bw[rx]
+    out = bw[ro]
+    xm = 0.0
+    for i in range(n2):
+        r = abs(x[i]) / max(1.0, abs(yb[i]))
+        if r > xm:
+            xm = r
+    for j in range(nb):
+        out[j] = 0.0
+    if not (xm > 0.0 and np.isfinite(xm)):
+        return
+    d = _SQRT_EPS / xm
+    for sgn in (1.0, -1.0):
+        for i in range(n2):
+            yt[i] = yb[i] + sgn * d * x[i]
+        for i in range(n2, n):
+            yt[i] = yb[i]
+        st = rhs(t, row_ptr(bw, _B_YT), row_ptr(bw, _B_FT), ptr(p))
+        stats[ST_NRHS] += 1
+        if st == 0 and all_finite(ft):
+            for j in range(nb):
+                out[j] = (ft[n2 + j] - fb[n2 + j]) / (sgn * d)
+            return
+
+
+@njit(cache=True)
+def _border_apply(rhs, t, p, m1, nb, z, bw, iu, stats, out):
+    """out = B_qv z for a real or complex z (length >= 2 m1): real and imaginary parts apart
+    (``iu`` 0.0 or 1j, typed like z and out)."""
+    n2 = 2 * m1
+    xr = bw[_B_XR]
+    xi = bw[_B_XI]
+    cplx = False
+    for i in range(n2):
+        v = z[i]
+        xr[i] = v.real
+        xi[i] = v.imag
+        if v.imag != 0.0:
+            cplx = True
+    _border_dir(rhs, t, p, m1, nb, bw, _B_XR, _B_OR, stats)
+    if cplx:
+        _border_dir(rhs, t, p, m1, nb, bw, _B_XI, _B_OI, stats)
+    else:
+        for j in range(nb):
+            bw[_B_OI, j] = 0.0
+    for j in range(nb):
+        out[j] = bw[_B_OR, j] + iu * bw[_B_OI, j]
+
+
+@njit(cache=True)
+def _border_factor(rhs, t, p, blk, m1, nb, g, sfac, bcol, bz, bs, bp, bw, iu, stats):
+    """The border's part of the factorisation for the shift g (real or complex): the columns
+    z^j = S_t(0, A_w e_j), D_j = B_qv z^j, and the LU of Sigma = g I - B_w - D.  3 nb rhs calls
+    for a complex g, nb for a real one.  Returns 0, or k + 1 for a singular Sigma."""
+    n2 = 2 * m1
+    n = bz.shape[1]
+    col = np.zeros(nb, dtype=bz.dtype)
+    for j in range(nb):
+        z = bz[j]
+        for i in range(n):
+            z[i] = 0.0
+        for i in range(m1):
+            z[m1 + i] = bcol[m1 + i, j]
+        _nw.solve(p, blk, g, sfac, m1, z)
+        _border_apply(rhs, t, p, m1, nb, z, bw, iu, stats, col)
+        for i in range(nb):
+            bs[i, j] = -bcol[n2 + i, j] - col[i]
+        bs[j, j] += g
+    return lu_factor(bs, bp)
+
+
+@njit(cache=True)
+def _border_solve(rhs, t, p, m1, nb, b, bz, bs, bp, bw, iu, stats):
+    """Complete the tether solve already done in b[:2 m1] (z0) with the border: z_w and
+    z += sum_j z_w,j z^j (b[2 m1:] holds b_w on entry, z_w on return)."""
+    n2 = 2 * m1
+    rw = np.zeros(nb, dtype=b.dtype)
+    _border_apply(rhs, t, p, m1, nb, b, bw, iu, stats, rw)
+    for j in range(nb):
+        rw[j] += b[n2 + j]
+    lu_solve(bs, bp, rw)
+    for j in range(nb):
+        zj = bz[j]
+        c = rw[j]
+        for i in range(n2):
+            b[i] += c * zj[i]
+        b[n2 + j] = rw[j]
+
+
+@njit(cache=True)
+def _increment_noise(rhs, t, y, f0, p, scal, tmp, out, struct, e1, ip1, fjac, fac1, m1, blk, sfac1, nb, bz1,
+                     bs1, bp1, bw, tb, stats):  # fmt: skip
     """RMS (tolerance units) of the change of the real Newton system's solution when y moves by
     one rounding unit: the floor below which the increments of the simplified Newton iteration
     are round-off (docs/integrators.md section 12).  One rhs call and one linear solve."""
@@ -372,7 +551,7 @@ def _increment_noise(rhs, t, y, f0, p, scal, tmp, out, struct, e1, ip1, fjac, fa
         return 0.0
     for i in range(n):
         out[i] -= f0[i]
-    _lin(struct, e1, ip1, fjac, fac1, m1, out, p, blk, sfac1)
+    _lin(struct, e1, ip1, fjac, fac1, m1, out, p, blk, sfac1, rhs, nb, bz1, bs1, bp1, bw, tb, 0.0, stats)
     acc = 0.0
     for i in range(n):
         acc += scaled_sq(out[i], scal[i])
@@ -407,6 +586,7 @@ def radau5_core(
     blk,
     sfac1,
     sfac2,
+    border,
     resume,
     event,
     ne,
@@ -430,6 +610,8 @@ def radau5_core(
     t_end = t_out[m - 1]
     m1 = is_[_I_M1]
     struct = is_[_I_STRUCT] != 0
+    nb = is_[_I_NBORDER] if struct else 0
+    bcol, bz1, bz2, bs1, bs2, bp1, bp2, bw = border
     thstep = fs[_F_THSTEP]
     nit = int(fs[_F_NIT]) if fs[_F_NIT] > 0.0 else NIT
     jac_every = fs[_F_JACEVERY] > 0.0
@@ -496,6 +678,7 @@ def radau5_core(
     lu_valid = is_[_I_LU_VALID] != 0
     naccpt = is_[_I_NACCPT]
     nsing = is_[_I_NSING]
+    tb = fs[_F_TBASE]
 
     caljac = False  # the Jacobian in fjac was evaluated at the current (t, y)
     reject = False
@@ -528,11 +711,25 @@ def radau5_core(
                         tmp[i] = y[i] + cq * (cont[1, i] + (cq - C2M1) * (
                             cont[2, i] + (cq - C1M1) * cont[3, i]))  # fmt: skip
                     st = _nw.rod_blocks(tmp, p, m1, blk)
+                    tb = t + 0.5 * h
                 else:
                     st = _nw.rod_blocks(y, p, m1, blk)
+                    tb = t
+                    if nb > 0:
+                        for i in range(n):
+                            tmp[i] = y[i]
                 stats[ST_NJAC] += 1
                 if st != 0:
                     st = -1
+                elif nb > 0:
+                    # the border: f at the same base state and its nb columns (section 13)
+                    st = _border_jacobian(rhs, tb, tmp, p, m1, nb, bcol, bw, stats)
+                    if st != 0 and tb != t:
+                        # the model failed at the extrapolated mid-step state: the border at
+                        # (t, y) instead (an approximate matrix changes the rate, not the result)
+                        tb = t
+                        st = _border_jacobian(rhs, tb, y, p, m1, nb, bcol, bw, stats)
+                    fs[_F_TBASE] = tb
             else:
                 st = _jacobian(rhs, t, y, f0, p, fjac, tmp, stats)
             if st != 0:
@@ -551,6 +748,12 @@ def radau5_core(
                 ier = _nw.factor(p, blk, U1 / h, sfac1)
                 if ier == 0:
                     ier = _nw.factor(p, blk, complex(ALPH / h, BETA / h), sfac2)
+                if ier == 0 and nb > 0:
+                    ier = _border_factor(rhs, tb, p, blk, m1, nb, U1 / h, sfac1, bcol, bz1, bs1, bp1, bw,
+                                         0.0, stats)  # fmt: skip
+                    if ier == 0:
+                        ier = _border_factor(rhs, tb, p, blk, m1, nb, complex(ALPH / h, BETA / h), sfac2,
+                                             bcol, bz2, bs2, bp2, bw, 1j, stats)  # fmt: skip
             else:
                 ier = _decompose(fjac, h, e1, e2, ip1, ip2, stats, m1)
             if ier != 0:
@@ -650,10 +853,10 @@ def radau5_core(
                 z1[i] = -f1[i] * fac1 + TI11 * a1 + TI12 * a2 + TI13 * a3
                 z2[i] = s2 * alphn - s3 * betan + TI21 * a1 + TI22 * a2 + TI23 * a3
                 z3[i] = s3 * alphn + s2 * betan + TI31 * a1 + TI32 * a2 + TI33 * a3
-            _lin(struct, e1, ip1, fjac, fac1, m1, z1, p, blk, sfac1)
+            _lin(struct, e1, ip1, fjac, fac1, m1, z1, p, blk, sfac1, rhs, nb, bz1, bs1, bp1, bw, tb, 0.0, stats)
             for i in range(n):
                 w[i] = complex(z2[i], z3[i])
-            _lin(struct, e2, ip2, fjac, fac2, m1, w, p, blk, sfac2)
+            _lin(struct, e2, ip2, fjac, fac2, m1, w, p, blk, sfac2, rhs, nb, bz2, bs2, bp2, bw, tb, 1j, stats)
             for i in range(n):
                 z2[i] = w[i].real
                 z3[i] = w[i].imag
@@ -693,7 +896,8 @@ def radau5_core(
                     if floor_gain > 0.0:
                         if noise < 0.0:
                             noise = _increment_noise(rhs, t, y, f0, p, scal, tmp, wnoise, struct, e1,
-                                                     ip1, fjac, fac1, m1, blk, sfac1, stats)  # fmt: skip
+                                                     ip1, fjac, fac1, m1, blk, sfac1, nb, bz1, bs1, bp1,
+                                                     bw, tb, stats)  # fmt: skip
                         if dyno <= floor_gain * noise:
                             fail = 0
                             at_floor = True
@@ -749,7 +953,7 @@ def radau5_core(
                 # Weights for the error test use max(|y|, |y_new|), as the DOP853 kernel and
                 # scipy do; f3 is free here and holds them.
                 f3[i] = atol_i[i] + rtol_i * max(abs(y[i]), abs(y[i] + z3[i]))
-            _lin(struct, e1, ip1, fjac, fac1, m1, tmp, p, blk, sfac1)
+            _lin(struct, e1, ip1, fjac, fac1, m1, tmp, p, blk, sfac1, rhs, nb, bz1, bs1, bp1, bw, tb, 0.0, stats)
             for i in range(n):
                 err += scaled_sq(tmp[i], f3[i])
             err = max(np.sqrt(err / n), 1e-10)
@@ -763,7 +967,7 @@ def radau5_core(
                 if st == 0 and all_finite(f1):
                     for i in range(n):
                         tmp[i] = f1[i] + f2[i]
-                    _lin(struct, e1, ip1, fjac, fac1, m1, tmp, p, blk, sfac1)
+                    _lin(struct, e1, ip1, fjac, fac1, m1, tmp, p, blk, sfac1, rhs, nb, bz1, bs1, bp1, bw, tb, 0.0, stats)
                     err = 0.0
                     for i in range(n):
                         err += scaled_sq(tmp[i], f3[i])
@@ -978,12 +1182,15 @@ def radau5_run(rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stat
     fs[_F_THSTEP] = THETA_STEP
     fs[_F_NIT] = NIT
     fs[_F_FLOOR] = FLOOR_GAIN
-    is_ = np.zeros(8, dtype=np.int64)
+    is_ = np.zeros(10, dtype=np.int64)
     ev = np.array([0.0, -1.0, -1.0, 0.0])
     blk = np.zeros((1, _nw.BLK_SIZE))
     sf1 = np.zeros((1, _nw.FAC_SIZE))
     sf2 = np.zeros((1, _nw.FAC_SIZE), dtype=np.complex128)
+    border = (np.zeros((n, 1)), np.zeros((1, n)), np.zeros((1, n), dtype=np.complex128), np.zeros((1, 1)),
+              np.zeros((1, 1), dtype=np.complex128), np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64),
+              np.zeros((_B_ROWS, n)))  # fmt: skip
     return radau5_core(
         rhs, t, y, t_out, p, rtol, atol, h, h_max, max_steps, y_out, stats, fixed_step,
-        fjac, e1, e2, ip1, ip2, cont, f0, fs, is_, blk, sf1, sf2, False, rhs, 0, ev,
+        fjac, e1, e2, ip1, ip2, cont, f0, fs, is_, blk, sf1, sf2, border, False, rhs, 0, ev,
     )  # fmt: skip

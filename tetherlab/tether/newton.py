@@ -38,7 +38,9 @@ from ..kernel.layout import (
     H_FORM,
     H_LEN,
     H_NRODS,
+    H_NQT,
     H_NSTATE,
+    H_OFF_BODY,
     H_NRIGID,
     H_NROOT,
     H_NTETH,
@@ -57,6 +59,7 @@ from ..kernel.layout import (
     RT_M,
     RT_SIZE,
     BT_NCHILD,
+    BT_RIGID,
     BT_SIZE,
     TT_MODEL,
     TT_PARENT,
@@ -77,7 +80,15 @@ FAC_SIZE = 18
 
 
 def structure_supported(p, n_state, second_order):
-    """'' if the structured Newton matrix applies to this model and state, else the reason."""
+    """'' if the structured Newton matrix applies to this model and state, else the reason.
+
+    ``second_order``: True for y = [q, q'] (M1 = n/2), or the integer M1 of y = [q, q', w] with a
+    first-order block w (attitude and wheel states of rigid bodies, docs/model.md section 12).
+    With rigid bodies (one root, Cowell's inertial formulation) the structured matrix is the
+    bordered one of docs/integrators.md section 13: the tether blocks of :func:`solve` with every
+    body as a point mass of its translational mass at its joint, bordered by finite-difference
+    columns of the w unknowns (tetherlab/integrators/radau5.py, ``_border_*``).
+    """
     if not second_order:
         return "the state is not declared second order (y = [q, q'])"
     if p.size < H_SIZE or int(p[H_LEN]) != p.size:
@@ -86,20 +97,32 @@ def structure_supported(p, n_state, second_order):
         # (in the frame turning with the orbit the rod blocks are the same functions of d, d')
         return f"formulation code {int(p[H_FORM])} is not Cowell's"
     nrods = int(p[H_NRODS])
-    expect = 2 * (3 + 3 * nrods)
-    if int(p[H_NSTATE]) != n_state or n_state != expect:
-        return (f"state of {n_state} components is not the Cowell tether layout "
-                f"2*(3 + 3*{nrods}) = {expect} (components the structured solver does not know)")
+    nrigid = int(p[H_NRIGID])
+    m1 = 3 + 3 * nrods
+    if nrigid == 0 or second_order is True:
+        expect = 2 * m1
+        if int(p[H_NSTATE]) != n_state or n_state != expect or (second_order is not True and second_order != m1):
+            return (f"state of {n_state} components is not the Cowell tether layout "
+                    f"2*(3 + 3*{nrods}) = {expect} (components the structured solver does not know)")
+    else:
+        nw = int(p[H_NSTATE]) - 2 * m1
+        if int(p[H_NSTATE]) != n_state or int(second_order) != m1 or int(p[H_NQT]) != m1 or nw < 7 * nrigid:
+            return (f"state of {n_state} components with M1 = {int(second_order)} is not the Cowell "
+                    f"layout [q, q', attitude, wheels] with M1 = 3 + 3*{nrods} = {m1}")
+        if int(p[H_FORM]) != FORM_COWELL:
+            return "rigid bodies in the frame turning with the orbit (the bordered matrix is built for Cowell's inertial frame)"
     if nrods < 1:
         return "no rods"
-    # Stars and trees of point masses with one root: each tether hangs from the root body or from
-    # the tip body of another tether, and the elimination runs leaves first (the tether order of
-    # chain.py).  Rigid bodies (6x6 blocks and first-order attitude states) and forests of several
-    # roots take the dense path.
-    if int(p[H_NROOT]) != 1 or int(p[H_NRIGID]) != 0:
-        return (f"{int(p[H_NROOT])} root bodies and {int(p[H_NRIGID])} rigid bodies (the structured blocks "
-                "are those of point masses under one root)")  # fmt: skip
+    # Stars and trees with one root: each tether hangs from the root body or from the tip body of
+    # another tether, and the elimination runs leaves first (the tether order of chain.py).
+    # Rigid bodies enter the tether blocks as point masses at their joints, their attitude and
+    # wheel states as the border (docs/integrators.md section 13).  Forests of several roots
+    # take the dense path.
+    if int(p[H_NROOT]) != 1:
+        return (f"{int(p[H_NROOT])} root bodies (the structured blocks are those of one tree under "
+                "one root)")  # fmt: skip
     offt = int(p[H_OFF_TETH])
+    offb = int(p[H_OFF_BODY])
     nteth = int(p[H_NTETH])
     for k in range(nteth):
         tb = offt + k * TT_SIZE
@@ -108,7 +131,8 @@ def structure_supported(p, n_state, second_order):
             return f"tether {k} hangs from body {parent}, neither the root nor a tether's tip"
         if parent > 0 and int(p[offt + (parent - 1) * TT_SIZE + TT_CHILD]) != parent:
             return f"tether {k} hangs from body {parent}, which is not a point mass at a tether's tip"
-        if any(p[tb + TT_PA + c] != 0.0 for c in range(3)):
+        rigid_parent = nrigid > 0 and p[offb + parent * BT_SIZE + BT_RIGID] != 0.0
+        if not rigid_parent and any(p[tb + TT_PA + c] != 0.0 for c in range(3)):
             return f"tether {k} is attached off its parent's centre (a rigid body's attachment point)"
     return ""
 
