@@ -42,9 +42,10 @@ RIGID_FREE = {
 }
 
 
-def forest_scene(rods=(3, 4, 5), duration="60 s", free="point", damping="200 N s"):
+def forest_scene(rods=(3, 4, 5), duration="60 s", free="point", damping="200 N s", h2_fixed=False):
     """Two tethered systems and a free body: hub h1 (500 kg) carrying a1 and a2; h2 (200 kg,
-    its own orbit) carrying b1; a free body f (a point mass, or a rigid body with a wheel)."""
+    its own orbit, or ``h2_fixed``: held at rest) carrying b1; a free body f (a point mass, or a
+    rigid body with a wheel)."""
     def teth(frm, to, n, length, theta):
         return {"from": frm, "to": to, "rods": n, "length": length, "EA": "2e4 N", "mass": "2 kg",
                 "damping": damping, "initial": {"theta": theta}}  # fmt: skip
@@ -55,6 +56,7 @@ def forest_scene(rods=(3, 4, 5), duration="60 s", free="point", damping="200 N s
         "a2": {"mass": "20 kg"},
         "h2": {"mass": "200 kg", "elements": {"a": "7010 km", "e": 0.001, "i": "30 deg", "nu": "12 deg"}},
         "b1": {"mass": "15 kg"},
+        **({"h2": {"fixed": True, "position": ["7010 km", "0 km", "0 km"]}} if h2_fixed else {}),
         "f": RIGID_FREE if free == "rigid" else {"mass": "40 kg", "elements": {"a": "7020 km", "e": 0.0, "nu": "5 deg"}},
     }
     tethers = {
@@ -183,10 +185,14 @@ def test_forest_layout_has_root_blocks_after_the_rods():
     assert nw.structure_supported(p, prep.y0.size, True) == ""
 
 
-@pytest.mark.parametrize("damping", ["0 N s", "200 N s"])
-def test_forest_solve_equals_dense_lu(damping):
-    prep = prepare(forest_scene(damping=damping))
+@pytest.mark.parametrize("damping, h2_fixed", [("0 N s", False), ("200 N s", False), ("200 N s", True)])
+def test_forest_solve_equals_dense_lu(damping, h2_fixed):
+    # (h2_fixed: a group's fixed body is its tree's root, tetherlab/pipeline.py; the root that is
+    # not the first is then held at rest, a row g z = b without tether terms)
+    prep = prepare(forest_scene(damping=damping, h2_fixed=h2_fixed))
     p = prep.model.fresh_params()
+    if h2_fixed:
+        assert [m for _, _, m in _roots(p)] == [500.0, 0.0, 40.0]
     # round-off: the matrix has cond ~ 1e3-1e4 here (as tests/test_newton_structured.py's tree),
     # so 1e-11 relative leaves a margin of 10 or more
     for rel in _solve_vs_dense(p, _state(prep)):

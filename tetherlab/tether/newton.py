@@ -17,12 +17,14 @@ section 6, derives M_x and the blocks; solving E z = r costs two O(n) transforms
 tridiagonal solve of N (block Thomas from each tip to its root, the tethers' Schur complements
 accumulated at the root body, as the reaction solve of chain.py does).
 
-Only the state layout of Cowell's formulation (y = [q, q'], q = (r0, d_1..d_N)) is understood:
-:func:`structure_supported` says why not otherwise, and the caller then keeps the dense path.
+Only the state layout of Cowell's formulation (y = [q, q'], q = (r0, d_1..d_N, r_1, ...), one
+position block per root body at its BT_QOFF, the first root's first) is understood:
+:func:`structure_supported` says why not otherwise, and the caller then keeps the dense path.  A
+forest (several roots) is block diagonal over its trees: the elimination ends at each root.
 
 Storage (float64, per rod g, BLK_SIZE): MAA (9), MAB (9), KEL (9), KV (9).
 Factors (dtype of g, real or complex; per rod g the joint B_g, FAC_SIZE): S^-1 (9), Q (9); row
-``nrods`` holds the root's S^-1.
+``nrods + i`` holds root i's S^-1 (i in the order of the root list p[H_OFF_ROOTS]).
 """
 
 from __future__ import annotations
@@ -89,7 +91,8 @@ def structure_supported(p, n_state, second_order):
 
     ``second_order``: True for y = [q, q'] (M1 = n/2), or the integer M1 of y = [q, q', w] with a
     first-order block w (attitude and wheel states of rigid bodies, docs/model.md section 12).
-    With rigid bodies (one root, Cowell's inertial formulation) the structured matrix is the
+    Forests (several roots) are supported: the matrix is block diagonal over the trees.
+    With rigid bodies (Cowell's inertial formulation) the structured matrix is the
     bordered one of docs/integrators.md section 13: the tether blocks of :func:`solve` with every
     body as a point mass of its translational mass at its joint, bordered by finite-difference
     columns of the w unknowns (tetherlab/integrators/radau5.py, ``_border_*``).
