@@ -7,9 +7,12 @@ block-Thomas elimination of section 6 ends at each root separately (tetherlab/te
 * The structured solve equals a dense LU of the same matrix, assembled here in numpy from the rod
   blocks and the parameter block (every root's position block at its body's BT_QOFF in q), on a
   forest of two tethered systems (one a hub of two tethers) and a free body; real and complex
-  shift.  Negative control: the second tree's root left out of the elimination.
+  shift; also with a fixed root that is not the first, and in the frame turning with the orbit.
+  Negative controls: the second tree's root left out of the elimination; the frame terms left out
+  of the dense matrix.
 * Whole runs with newton="structured" and newton="dense" agree within a bound from the tolerance.
-* A free rigid body in the forest goes through the bordered matrix (section 13) the same way.
+* Rigid roots in the forest (a free rigid body; the second tree's root rigid with its tether
+  attached off its centre) go through the bordered matrix (section 13) the same way.
 * newton="auto" takes the structured path for a point-mass forest from AUTO_STRUCTURED_MIN_RODS rods.
 """
 
@@ -42,10 +45,10 @@ RIGID_FREE = {
 }
 
 
-def forest_scene(rods=(3, 4, 5), duration="60 s", free="point", damping="200 N s", h2_fixed=False):
+def forest_scene(rods=(3, 4, 5), duration="60 s", free="point", damping="200 N s", h2_fixed=False, h2_rigid=False):
     """Two tethered systems and a free body: hub h1 (500 kg) carrying a1 and a2; h2 (200 kg,
     its own orbit, or ``h2_fixed``: held at rest) carrying b1; a free body f (a point mass, or a
-    rigid body with a wheel)."""
+    rigid body with a wheel); ``h2_rigid``: h2 a rigid body too, t3 attached 1.5 m off its centre."""
     def teth(frm, to, n, length, theta):
         return {"from": frm, "to": to, "rods": n, "length": length, "EA": "2e4 N", "mass": "2 kg",
                 "damping": damping, "initial": {"theta": theta}}  # fmt: skip
@@ -57,6 +60,8 @@ def forest_scene(rods=(3, 4, 5), duration="60 s", free="point", damping="200 N s
         "h2": {"mass": "200 kg", "elements": {"a": "7010 km", "e": 0.001, "i": "30 deg", "nu": "12 deg"}},
         "b1": {"mass": "15 kg"},
         **({"h2": {"fixed": True, "position": ["7010 km", "0 km", "0 km"]}} if h2_fixed else {}),
+        **({"h2": {**RIGID_FREE, "elements": {"a": "7010 km", "e": 0.001, "i": "30 deg", "nu": "12 deg"}}}
+           if h2_rigid else {}),
         "f": RIGID_FREE if free == "rigid" else {"mass": "40 kg", "elements": {"a": "7020 km", "e": 0.0, "nu": "5 deg"}},
     }
     tethers = {
@@ -64,6 +69,8 @@ def forest_scene(rods=(3, 4, 5), duration="60 s", free="point", damping="200 N s
         "t2": teth("h1", "a2", rods[1], "600 m", "-30 deg"),
         "t3": teth("h2", "b1", rods[2], "800 m", "10 deg"),
     }
+    if h2_rigid:
+        tethers["t3"]["from_point"] = ["1 m", "0.5 m", "-1 m"]
     return Scene.from_dict({
         "duration": duration,
         "effects": {"central_gravity": {}},
@@ -152,14 +159,20 @@ def _state(prep, seed=5):
     return y
 
 
-def _solve_vs_dense(p, y, blk_p=None, seed=11):
+def _solve_vs_dense(p, y, blk_p=None, seed=11, omega=None):
     """max |x - x_dense| / max |x_dense| for both shifts: the structured solve with the parameter
-    block ``p`` against a dense LU of the matrix assembled from ``blk_p`` (default: p)."""
+    block ``p`` against a dense LU of the matrix assembled from ``blk_p`` (default: p).  ``omega``:
+    the state is in the frame turning with omega, whose Coriolis and centrifugal terms add -2 W
+    and -W^2 to every joint's A_v and A_q (as tests/test_newton_structured.py)."""
     blk_p = p if blk_p is None else blk_p
     m1 = int(blk_p[L.H_NQT])
     blk, f1, f2 = nw.workspace(blk_p)
     assert nw.rod_blocks(y, blk_p, m1, blk) == 0
     aq, av = _dense_A(blk_p, blk, m1)
+    if omega is not None:
+        W = np.array([[0.0, -omega[2], omega[1]], [omega[2], 0.0, -omega[0]], [-omega[1], omega[0], 0.0]])
+        aq = aq - np.kron(np.eye(m1 // 3), W @ W)
+        av = av - np.kron(np.eye(m1 // 3), 2 * W)
     rng = np.random.default_rng(seed)
     out = []
     for g, fac in ((G_REAL, f1), (G_CPLX, f2)):
@@ -197,6 +210,23 @@ def test_forest_solve_equals_dense_lu(damping, h2_fixed):
     # so 1e-11 relative leaves a margin of 10 or more
     for rel in _solve_vs_dense(p, _state(prep)):
         assert rel <= 1e-11
+
+
+def test_forest_solve_in_the_turning_frame_equals_dense_lu():
+    # cowell-orbit (docs/integrators.md section 11): every joint, each root's block included,
+    # carries the frame terms; a frame rate of 0.05 rad/s makes them matter at h = 0.5 s
+    from tetherlab.formulations import cowell_orbit as co
+
+    prep = prepare(forest_scene())
+    omega = np.array([0.01, -0.03, 0.04])
+    pe = co.attach(prep.model.fresh_params(), omega)
+    y = co.to_frame(0.0, _state(prep), omega, prep.model.n_qt)
+    assert nw.structure_supported(pe, y.size, True) == ""
+    for rel in _solve_vs_dense(pe, y, omega=omega):
+        assert rel <= 1e-11  # round-off, as above
+    # the same matrix without the frame terms is not what the solve inverts
+    for rel in _solve_vs_dense(pe, y):
+        assert rel > 1e-6
 
 
 def test_forest_solve_without_the_second_root_disagrees():
@@ -255,12 +285,14 @@ def test_structured_and_dense_runs_of_a_forest_agree():
     assert np.max(np.abs(qa - qb)) * 2 * SQ3 <= 100 * prep.rtol * 200.0
 
 
-def test_forest_with_a_free_rigid_body_takes_the_bordered_matrix():
-    # the rigid body's attitude and wheel are the border's unknowns (section 13); its position is
-    # a root block of mass 300 kg like any free point mass
-    prep = prepare(forest_scene(free="rigid", duration="30 s"))
+@pytest.mark.parametrize("h2_rigid", [False, True])
+def test_forest_with_rigid_roots_takes_the_bordered_matrix(h2_rigid):
+    # the rigid bodies' attitudes and wheels are the border's unknowns (section 13); a rigid
+    # root's position is a root block of its mass like a free point mass's.  h2_rigid: the second
+    # tree's root rigid too, its tether attached off its centre
+    prep = prepare(forest_scene(free="rigid", duration="30 s", h2_rigid=h2_rigid))
     m1 = prep.model.n_qt
-    assert prep.y0.size == 2 * m1 + 7 + 1
+    assert prep.y0.size == 2 * m1 + (2 if h2_rigid else 1) * (7 + 1)
     assert nw.structure_supported(prep.model.fresh_params(), prep.y0.size, m1) == ""
     _assert_runs_agree(prep, _runs(prep, m1))
 
