@@ -208,13 +208,13 @@ def test_auto_takes_the_bordered_matrix_from_its_rod_count():
         m1 = prep.model.n_qt
         desc, p_struct = driver._newton_choice("radau5", "auto", prep.model.fresh_params(), prep.y0.size, m1)
         assert desc.startswith(kind) and (p_struct is not None) == (kind == "structured")
-    # several roots (a forest) stay refused, with the reason: the root count of the block set
-    # to 2 on a copy
+    # forests are structured too (tests/test_newton_forest.py); a root count that does not match
+    # the state's layout (set to 2 on a copy: q has one root block) is refused with the reason
     from tetherlab.kernel.layout import H_NROOT
 
     p = prep.model.fresh_params()
     p[H_NROOT] = 2
-    assert "2 root bodies" in nw.structure_supported(p, prep.y0.size, m1)
+    assert "is not the Cowell layout" in nw.structure_supported(p, prep.y0.size, m1)
 
 
 def test_bordered_run_restarts_bit_for_bit():

@@ -152,6 +152,9 @@ EXTRA_SECTIONS = (
                   "damped and undamped; last rows: fitted exponents (issue 11)"),
     ("rigid_newton", "RADAU5 with a rigid body: dense against the bordered structured Newton matrix, per simulated "
                      "second against the rod count; last rows: fitted exponents (issue 11, docs/integrators.md 13)"),
+    ("forest_newton", "RADAU5 on a forest (two bench-libration-like systems, D = 2e4 N s): dense against the "
+                      "structured Newton matrix, per simulated second against the rods per tether; last rows: "
+                      "fitted exponents (issue 11, docs/integrators.md 13)"),
     ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity (issue 13)"),
     ("igrf", "IGRF-14 field: cost of one evaluation against the degree (issue 13)"),
     ("rigid", "Right-hand-side cost: rigid root + 3 wheels + 4 tethers against the point-mass hub (issue 10)"),

@@ -17,12 +17,14 @@ section 6, derives M_x and the blocks; solving E z = r costs two O(n) transforms
 tridiagonal solve of N (block Thomas from each tip to its root, the tethers' Schur complements
 accumulated at the root body, as the reaction solve of chain.py does).
 
-Only the state layout of Cowell's formulation (y = [q, q'], q = (r0, d_1..d_N)) is understood:
-:func:`structure_supported` says why not otherwise, and the caller then keeps the dense path.
+Only the state layout of Cowell's formulation (y = [q, q'], q = (r0, d_1..d_N, r_1, ...), one
+position block per root body at its BT_QOFF, the first root's first) is understood:
+:func:`structure_supported` says why not otherwise, and the caller then keeps the dense path.  A
+forest (several roots) is block diagonal over its trees: the elimination ends at each root.
 
 Storage (float64, per rod g, BLK_SIZE): MAA (9), MAB (9), KEL (9), KV (9).
 Factors (dtype of g, real or complex; per rod g the joint B_g, FAC_SIZE): S^-1 (9), Q (9); row
-``nrods`` holds the root's S^-1.
+``nrods + i`` holds root i's S^-1 (i in the order of the root list p[H_OFF_ROOTS]).
 """
 
 from __future__ import annotations
@@ -41,12 +43,14 @@ from ..kernel.layout import (
     H_NQT,
     H_NSTATE,
     H_OFF_BODY,
+    H_NBODY,
     H_NRIGID,
     H_NROOT,
     H_NTETH,
     H_OFF_FORM,
     H_OFF_ORDER,
     H_OFF_ROD,
+    H_OFF_ROOTS,
     H_OFF_TETH,
     H_ROOT_INV_M,
     H_ROOT_M,
@@ -58,7 +62,10 @@ from ..kernel.layout import (
     RT_LU,
     RT_M,
     RT_SIZE,
+    BT_INV_M,
+    BT_M,
     BT_NCHILD,
+    BT_QOFF,
     BT_RIGID,
     BT_SIZE,
     TT_MODEL,
@@ -84,7 +91,8 @@ def structure_supported(p, n_state, second_order):
 
     ``second_order``: True for y = [q, q'] (M1 = n/2), or the integer M1 of y = [q, q', w] with a
     first-order block w (attitude and wheel states of rigid bodies, docs/model.md section 12).
-    With rigid bodies (one root, Cowell's inertial formulation) the structured matrix is the
+    Forests (several roots) are supported: the matrix is block diagonal over the trees.
+    With rigid bodies (Cowell's inertial formulation) the structured matrix is the
     bordered one of docs/integrators.md section 13: the tether blocks of :func:`solve` with every
     body as a point mass of its translational mass at its joint, bordered by finite-difference
     columns of the w unknowns (tetherlab/integrators/radau5.py, ``_border_*``).
@@ -98,38 +106,47 @@ def structure_supported(p, n_state, second_order):
         return f"formulation code {int(p[H_FORM])} is not Cowell's"
     nrods = int(p[H_NRODS])
     nrigid = int(p[H_NRIGID])
-    m1 = 3 + 3 * nrods
+    nroot = int(p[H_NROOT])
+    # q = (r_root0, d_1..d_N, r_root1, ...): one position block per root (tetherlab/system.py)
+    m1 = 3 * nroot + 3 * nrods
     if nrigid == 0 or second_order is True:
         expect = 2 * m1
-        if int(p[H_NSTATE]) != n_state or n_state != expect or (second_order is not True and second_order != m1):
+        if (int(p[H_NSTATE]) != n_state or n_state != expect or int(p[H_NQT]) != m1
+                or (second_order is not True and second_order != m1)):  # fmt: skip
             return (f"state of {n_state} components is not the Cowell tether layout "
-                    f"2*(3 + 3*{nrods}) = {expect} (components the structured solver does not know)")
+                    f"2*(3*{nroot} + 3*{nrods}) = {expect} (components the structured solver does not know)")
     else:
         nw = int(p[H_NSTATE]) - 2 * m1
         if int(p[H_NSTATE]) != n_state or int(second_order) != m1 or int(p[H_NQT]) != m1 or nw < 7 * nrigid:
             return (f"state of {n_state} components with M1 = {int(second_order)} is not the Cowell "
-                    f"layout [q, q', attitude, wheels] with M1 = 3 + 3*{nrods} = {m1}")
+                    f"layout [q, q', attitude, wheels] with M1 = 3*{nroot} + 3*{nrods} = {m1}")
         if int(p[H_FORM]) != FORM_COWELL:
             return "rigid bodies in the frame turning with the orbit (the bordered matrix is built for Cowell's inertial frame)"
     if nrods < 1:
         return "no rods"
-    # Stars and trees with one root: each tether hangs from the root body or from the tip body of
-    # another tether, and the elimination runs leaves first (the tether order of chain.py).
-    # Rigid bodies enter the tether blocks as point masses at their joints, their attitude and
-    # wheel states as the border (docs/integrators.md section 13).  Forests of several roots
-    # take the dense path.
-    if int(p[H_NROOT]) != 1:
-        return (f"{int(p[H_NROOT])} root bodies (the structured blocks are those of one tree under "
-                "one root)")  # fmt: skip
+    # Forests: each tether hangs from a root body or from the tip body of another tether, and the
+    # elimination runs leaves first (the tether order of chain.py) into each tree's root; the
+    # trees do not couple, so the matrix is block diagonal over them (docs/integrators.md
+    # section 13).  Rigid bodies enter the tether blocks as point masses at their joints, their
+    # attitude and wheel states as the border (section 13).
     offt = int(p[H_OFF_TETH])
     offb = int(p[H_OFF_BODY])
     nteth = int(p[H_NTETH])
+    nbody = int(p[H_NBODY])
+    offroots = int(p[H_OFF_ROOTS])
+    roots = [int(p[offroots + i]) for i in range(nroot)]
+    if nroot < 1 or roots[0] != 0:
+        return f"root list {roots} does not start with body 0"
+    for i, b in enumerate(roots):
+        qo = int(p[offb + b * BT_SIZE + BT_QOFF])
+        if b < 0 or b >= nbody or (1 <= b <= nteth) or qo < 0 or qo + 3 > m1 or (qo != 0) != (i != 0):
+            return f"root {i} (body {b}) has no position block of its own in q (offset {qo})"
     for k in range(nteth):
         tb = offt + k * TT_SIZE
         parent = int(p[tb + TT_PARENT])
-        if parent < 0 or parent > nteth:
-            return f"tether {k} hangs from body {parent}, neither the root nor a tether's tip"
-        if parent > 0 and int(p[offt + (parent - 1) * TT_SIZE + TT_CHILD]) != parent:
+        if parent < 0 or parent >= nbody or (parent > nteth and parent not in roots):
+            return f"tether {k} hangs from body {parent}, neither a root nor a tether's tip"
+        if 0 < parent <= nteth and int(p[offt + (parent - 1) * TT_SIZE + TT_CHILD]) != parent:
             return f"tether {k} hangs from body {parent}, which is not a point mass at a tether's tip"
         rigid_parent = nrigid > 0 and p[offb + parent * BT_SIZE + BT_RIGID] != 0.0
         if not rigid_parent and any(p[tb + TT_PA + c] != 0.0 for c in range(3)):
@@ -138,13 +155,34 @@ def structure_supported(p, n_state, second_order):
 
 
 def workspace(p):
-    """Arrays for the structured path: rod blocks, real and complex factors."""
+    """Arrays for the structured path: rod blocks, real and complex factors (rows nrods + i: the
+    S^-1 of root i)."""
     nrods = int(p[H_NRODS])
+    nroot = int(p[H_NROOT])
     return (
         np.zeros((nrods, BLK_SIZE)),
-        np.zeros((nrods + 1, FAC_SIZE)),
-        np.zeros((nrods + 1, FAC_SIZE), dtype=np.complex128),
+        np.zeros((nrods + nroot, FAC_SIZE)),
+        np.zeros((nrods + nroot, FAC_SIZE), dtype=np.complex128),
     )
+
+
+@njit(cache=True)
+def _root_mass(p, b):
+    """Mass of root body b, 0 when it is fixed (body 0: the header's root mass, as before forests)."""
+    if b == 0:
+        return p[H_ROOT_M] if p[H_ROOT_INV_M] > 0.0 else 0.0
+    bt = int(p[H_OFF_BODY]) + b * BT_SIZE
+    return p[bt + BT_M] if p[bt + BT_INV_M] > 0.0 else 0.0
+
+
+@njit(cache=True)
+def _free_parent(p, parent):
+    """False when body ``parent`` is a fixed root (its joint is not an unknown of the elimination)."""
+    if parent == 0:
+        return p[H_ROOT_INV_M] > 0.0
+    if parent <= int(p[H_NTETH]):
+        return True  # a tether's tip body (structure_supported: a point mass)
+    return p[int(p[H_OFF_BODY]) + parent * BT_SIZE + BT_INV_M] > 0.0
 
 
 @njit(cache=True)
@@ -290,14 +328,16 @@ def factor(p, blk, g, fac):
     g mf I + (the Schur terms of the tethers hanging from the tip body), S_j = P_j + P_{j+1} -
     Q_{j+1} S_{j+1}^-1 Q_{j+1}, with the rod blocks P = g MAA + KV + KEL/g, Q = g MAB - KV - KEL/g;
     each tether's first rod adds P_1 - Q_1 S_1^-1 Q_1 to its parent body's joint, and the root gets
-    S_0 = g m0 I + those of its tethers.  Returns 0 or 1 for a singular block.
+    S_0 = g m0 I + those of its tethers.  A forest repeats this per root (block diagonal over its
+    trees): root i's S^-1 goes to factor row nrods + i; a fixed root's block is g I.  Returns 0 or 1
+    for a singular block.
     """
     nteth = int(p[H_NTETH])
     offt = int(p[H_OFF_TETH])
     offo = int(p[H_OFF_ORDER])
     nrods = int(p[H_NRODS])
-    free_root = p[H_ROOT_INV_M] > 0.0
-    m0 = p[H_ROOT_M]
+    nroot = int(p[H_NROOT])
+    offroots = int(p[H_OFF_ROOTS])
     ginv = 1.0 / g
     s = np.zeros(9, dtype=fac.dtype)
     tmp = np.zeros(9, dtype=fac.dtype)
@@ -305,10 +345,14 @@ def factor(p, blk, g, fac):
     _frame_shift(p, g, sg)
     maa = np.zeros(9, dtype=fac.dtype)
     mab = np.zeros(9, dtype=fac.dtype)
-    # Schur terms collected at each body's joint: row 0 the root, row 1 + k the tip of tether k
-    acc = np.zeros((nteth + 1, 9), dtype=fac.dtype)
-    for c in range(9):
-        acc[0, c] = m0 * sg[c] if free_root else (g if c % 4 == 0 else 0.0)
+    # Schur terms collected at each body's joint (rows: kernel body index; 0 the first root, 1 + k
+    # the tip of tether k, then the other roots)
+    acc = np.zeros((int(p[H_NBODY]), 9), dtype=fac.dtype)
+    for i in range(nroot):
+        rb = int(p[offroots + i])
+        mr = _root_mass(p, rb)
+        for c in range(9):
+            acc[rb, c] = mr * sg[c] if mr > 0.0 else (g if c % 4 == 0 else 0.0)
     for j in range(nteth):
         k = int(p[offo + j])
         tb = offt + k * TT_SIZE
@@ -346,28 +390,31 @@ def factor(p, blk, g, fac):
             for c in range(9):
                 f[F_SINV + c] = tmp[c]
         parent = int(p[tb + TT_PARENT])
-        if parent > 0 or free_root:
+        if _free_parent(p, parent):
             b = blk[g0]
             row = acc[parent]
             _mass_times(b, B_MAA, sg, maa)
             for c in range(9):
                 row[c] += maa[c] + b[B_KV + c] + b[B_KEL + c] * ginv
             _sub_qsq(row, fac[g0], tmp)
-    det = _inv3(acc[0], tmp)
-    if det == 0.0 or not np.isfinite(abs(det)):
-        return 1
-    for c in range(9):
-        fac[nrods, F_SINV + c] = tmp[c]
+    for i in range(nroot):
+        det = _inv3(acc[int(p[offroots + i])], tmp)
+        if det == 0.0 or not np.isfinite(abs(det)):
+            return 1
+        for c in range(9):
+            fac[nrods + i, F_SINV + c] = tmp[c]
     return 0
 
 
 @njit(cache=True)
 def _parent_joint(p, offt, k):
-    """Offset in joint coordinates of the joint tether k hangs from: 0 for the root, else the last
-    joint of the tether whose tip body is its parent."""
+    """Offset in joint coordinates of the joint tether k hangs from: a root's position block in q
+    (BT_QOFF; 0 for the first), else the last joint of the tether whose tip body is its parent."""
     parent = int(p[offt + k * TT_SIZE + TT_PARENT])
     if parent == 0:
         return 0
+    if parent > int(p[H_NTETH]):
+        return int(p[int(p[H_OFF_BODY]) + parent * BT_SIZE + BT_QOFF])
     tp = offt + (parent - 1) * TT_SIZE
     return 3 + 3 * (int(p[tp + TT_ROD0]) + int(p[tp + TT_NRODS]) - 1)
 
@@ -391,9 +438,11 @@ def _sub_qsq(s, f, tmp):
 
 @njit(cache=True)
 def _tether_span(p, offt, k):
-    """(rods, first global rod, offset of the joint it hangs from) of tether k."""
+    """(rods, first global rod, offset of the joint it hangs from, whether that joint is free) of
+    tether k."""
     tb = offt + k * TT_SIZE
-    return int(p[tb + TT_NRODS]), int(p[tb + TT_ROD0]), _parent_joint(p, offt, k)
+    return (int(p[tb + TT_NRODS]), int(p[tb + TT_ROD0]), _parent_joint(p, offt, k),
+            _free_parent(p, int(p[tb + TT_PARENT])))  # fmt: skip
 
 
 @njit(cache=True)
@@ -402,24 +451,30 @@ def solve(p, blk, g, fac, m1, b):
     replaced by the structured E of the module docstring:
 
         z_v = T^-1 N^-1 (M_x T b_v + K_x T b_q / g),   z_q = (b_q + z_v) / g.
+
+    In a forest every root's joint is its own position block of q (BT_QOFF) and the elimination
+    ends at each root separately (factor row nrods + i for root i).
     """
     nteth = int(p[H_NTETH])
     offt = int(p[H_OFF_TETH])
     offo = int(p[H_OFF_ORDER])
     nrods = int(p[H_NRODS])
-    free_root = p[H_ROOT_INV_M] > 0.0
-    m0 = p[H_ROOT_M]
+    nroot = int(p[H_NROOT])
+    offroots = int(p[H_OFF_ROOTS])
+    offb = int(p[H_OFF_BODY])
     ginv = 1.0 / g
     xv = np.empty(m1, dtype=b.dtype)  # T b_v, then the right-hand side s, then w
     xq = np.empty(m1, dtype=b.dtype)  # T b_q
     s = np.zeros(m1, dtype=b.dtype)
-    # joint coordinates, parents before children: x_root = r0, x_B = x_A + 2 sqrt3 d
-    for c in range(3):
-        xv[c] = b[m1 + c]
-        xq[c] = b[c]
+    # joint coordinates, parents before children: x_root = r_root, x_B = x_A + 2 sqrt3 d
+    for i in range(nroot):
+        qo = int(p[offb + int(p[offroots + i]) * BT_SIZE + BT_QOFF])
+        for c in range(3):
+            xv[qo + c] = b[m1 + qo + c]
+            xq[qo + c] = b[qo + c]
     for j in range(nteth - 1, -1, -1):
         k = int(p[offo + j])
-        n, g0, pa = _tether_span(p, offt, k)
+        n, g0, pa, _ = _tether_span(p, offt, k)
         for i in range(n):
             gr = g0 + i
             o = 3 + 3 * gr
@@ -447,10 +502,14 @@ def solve(p, blk, g, fac, m1, b):
             xm[3 * j] = xv[3 * j] - (wx * wq - ww * q0) * ginv
             xm[3 * j + 1] = xv[3 * j + 1] - (wy * wq - ww * q1) * ginv
             xm[3 * j + 2] = xv[3 * j + 2] - (wz * wq - ww * q2) * ginv
-    for c in range(3):
-        s[c] = m0 * xm[c] if free_root else xv[c]
+    for i in range(nroot):
+        rb = int(p[offroots + i])
+        qo = int(p[offb + rb * BT_SIZE + BT_QOFF])
+        mr = _root_mass(p, rb)
+        for c in range(3):
+            s[qo + c] = mr * xm[qo + c] if mr > 0.0 else xv[qo + c]
     for k in range(nteth):
-        n, g0, pa = _tether_span(p, offt, k)
+        n, g0, pa, free_pa = _tether_span(p, offt, k)
         mf = p[offt + k * TT_SIZE + TT_TIP_M]
         for i in range(n):
             gr = g0 + i
@@ -465,7 +524,7 @@ def solve(p, blk, g, fac, m1, b):
                     ma += bl[B_MAA + 3 * a + c] * xm[oa + c] + bl[B_MAB + 3 * a + c] * xm[ob + c]
                     mb += bl[B_MAB + 3 * a + c] * xm[oa + c] + bl[B_MAA + 3 * a + c] * xm[ob + c]
                     ke += bl[B_KEL + 3 * a + c] * (xq[ob + c] - xq[oa + c])
-                if oa > 0 or free_root:
+                if i > 0 or free_pa:
                     s[oa + a] += ma + ke * ginv
                 s[ob + a] += mb - ke * ginv
             if i == n - 1 and mf > 0.0:
@@ -474,20 +533,22 @@ def solve(p, blk, g, fac, m1, b):
     # forward elimination of the right-hand side, leaves first (tip -> parent joint)
     for j in range(nteth):
         k = int(p[offo + j])
-        n, g0, pa = _tether_span(p, offt, k)
+        n, g0, pa, free_pa = _tether_span(p, offt, k)
         for i in range(n - 2, -1, -1):
             gr = g0 + i
             _sub_q_sinv_y(s, 3 + 3 * gr, fac[gr + 1], s, 3 + 3 * (gr + 1))
-        if pa > 0 or free_root:
+        if free_pa:
             _sub_q_sinv_y(s, pa, fac[g0], s, 3 + 3 * g0)
-    fr = fac[nrods]
-    y0 = (s[0], s[1], s[2])
-    for a in range(3):
-        xv[a] = fr[3 * a] * y0[0] + fr[3 * a + 1] * y0[1] + fr[3 * a + 2] * y0[2]
+    for i in range(nroot):
+        qo = int(p[offb + int(p[offroots + i]) * BT_SIZE + BT_QOFF])
+        fr = fac[nrods + i]
+        y0 = (s[qo], s[qo + 1], s[qo + 2])
+        for a in range(3):
+            xv[qo + a] = fr[3 * a] * y0[0] + fr[3 * a + 1] * y0[1] + fr[3 * a + 2] * y0[2]
     # back substitution, parents before children: w_j = S_j^-1 (y_j - Q_j w_{j-1})
     for j in range(nteth - 1, -1, -1):
         k = int(p[offo + j])
-        n, g0, pa = _tether_span(p, offt, k)
+        n, g0, pa, _ = _tether_span(p, offt, k)
         for i in range(n):
             gr = g0 + i
             f = fac[gr]
@@ -499,10 +560,12 @@ def solve(p, blk, g, fac, m1, b):
             for a in range(3):
                 xv[ob + a] = f[3 * a] * e[0] + f[3 * a + 1] * e[1] + f[3 * a + 2] * e[2]
     # back to q: z_v = T^-1 w, z_q = (b_q + z_v)/g
-    for c in range(3):
-        b[m1 + c] = xv[c]
+    for i in range(nroot):
+        qo = int(p[offb + int(p[offroots + i]) * BT_SIZE + BT_QOFF])
+        for c in range(3):
+            b[m1 + qo + c] = xv[qo + c]
     for k in range(nteth):
-        n, g0, pa = _tether_span(p, offt, k)
+        n, g0, pa, _ = _tether_span(p, offt, k)
         for i in range(n):
             gr = g0 + i
             oa = pa if i == 0 else 3 * gr
