@@ -21,17 +21,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tetherlab.formulations.cowell import cowell_rhs
-from tetherlab.integrators.driver import integrate
 from tetherlab.kernel import layout as L
-from tetherlab.pipeline import _event_args, prepare
+from tetherlab.pipeline import prepare
 from tetherlab.scene import Scene
 from tetherlab.tether import newton as nw
 
+from tests.helpers import assert_runs_agree as _assert_runs_agree
+from tests.helpers import dense_and_structured_runs as _runs
+from tests.helpers import newton_roots as _roots
+from tests.helpers import structured_vs_dense_lu as _solve_vs_dense
+
 SQ3 = np.sqrt(3.0)
-# RADAU5's two shifts at h = 0.5 s (U1/h and (ALPH + i BETA)/h)
-G_REAL = 3.6378342527444962 / 0.5
-G_CPLX = complex(2.6810828736277523, 3.0504301992474105) / 0.5
 
 RIGID_FREE = {
     "mass": "300 kg",
@@ -83,107 +83,11 @@ def forest_scene(rods=(3, 4, 5), duration="60 s", free="point", damping="200 N s
     })  # fmt: skip
 
 
-def _roots(p):
-    """[(body, its position offset in q, mass or 0 when fixed)] of every root (tetherlab/system.py)."""
-    offb = int(p[L.H_OFF_BODY])
-    out = []
-    for i in range(int(p[L.H_NROOT])):
-        b = int(p[int(p[L.H_OFF_ROOTS]) + i])
-        bt = offb + b * L.BT_SIZE
-        out.append((b, int(p[bt + L.BT_QOFF]), p[bt + L.BT_M] if p[bt + L.BT_INV_M] > 0 else 0.0))
-    return out
-
-
-def _dense_A(p, blk, m1):
-    """A_q, A_v of the structured matrix for a forest of point-mass trees, assembled densely in numpy
-    from the rod blocks and the parameter block (independent of newton.factor/solve; the forest
-    version of tests/test_newton_structured.py's): T of sums from every root's own position block,
-    M_x, K_x, C_x rod by rod, each root's row its mass (a fixed root: no row, A = 0 there)."""
-    offt = int(p[L.H_OFF_TETH])
-    nteth = int(p[L.H_NTETH])
-    roots = _roots(p)
-    qoff = {b: qo for b, qo, _ in roots}
-    fixed = {qo for _, qo, m in roots if m == 0.0}
-
-    def joint_of_body(body):
-        if body in qoff:
-            return qoff[body]
-        tb = offt + (body - 1) * L.TT_SIZE
-        return 3 + 3 * (int(p[tb + L.TT_ROD0]) + int(p[tb + L.TT_NRODS]) - 1)
-
-    T = np.zeros((m1, m1))
-    M = np.zeros((m1, m1))
-    K = np.zeros((m1, m1))
-    C = np.zeros((m1, m1))
-    for _, qo, m in roots:
-        T[qo : qo + 3, qo : qo + 3] = np.eye(3)
-        M[qo : qo + 3, qo : qo + 3] = np.eye(3) * (1.0 if m == 0.0 else m)
-    placed = set(qoff)
-    order = []
-    while len(order) < nteth:  # parents before children, for T
-        for k in range(nteth):
-            par = int(p[offt + k * L.TT_SIZE + L.TT_PARENT])
-            if k not in order and par in placed:
-                order.append(k)
-                placed.add(1 + k)
-    for k in order:
-        tb = offt + k * L.TT_SIZE
-        n, g0 = int(p[tb + L.TT_NRODS]), int(p[tb + L.TT_ROD0])
-        pa = joint_of_body(int(p[tb + L.TT_PARENT]))
-        for i in range(n):
-            g = g0 + i
-            oa, ob = (pa if i == 0 else 3 * g), 3 + 3 * g
-            T[ob : ob + 3] = T[oa : oa + 3]
-            T[ob : ob + 3, ob : ob + 3] += 2 * SQ3 * np.eye(3)
-            b = blk[g]
-            maa, mab, kel, kv = (b[9 * j : 9 * j + 9].reshape(3, 3) for j in range(4))
-            for o, sg, diag, off in ((oa, 1.0, (oa, maa), (ob, mab)), (ob, -1.0, (ob, maa), (oa, mab))):
-                if o in fixed:
-                    continue
-                M[o : o + 3, diag[0] : diag[0] + 3] += diag[1]
-                M[o : o + 3, off[0] : off[0] + 3] += off[1]
-                K[o : o + 3, oa : oa + 3] -= sg * kel
-                K[o : o + 3, ob : ob + 3] += sg * kel
-                C[o : o + 3, oa : oa + 3] -= sg * kv
-                C[o : o + 3, ob : ob + 3] += sg * kv
-            if i == n - 1:
-                M[ob : ob + 3, ob : ob + 3] += p[tb + L.TT_TIP_M] * np.eye(3)
-    Ti = np.linalg.inv(T)
-    return Ti @ np.linalg.solve(M, K) @ T, Ti @ np.linalg.solve(M, C) @ T
-
-
 def _state(prep, seed=5):
     y = prep.y0.copy()
     m1 = prep.model.n_qt
     y[m1 : 2 * m1] += np.random.default_rng(seed).normal(size=m1) * 0.01  # velocities off the rigid motion
     return y
-
-
-def _solve_vs_dense(p, y, blk_p=None, seed=11, omega=None):
-    """max |x - x_dense| / max |x_dense| for both shifts: the structured solve with the parameter
-    block ``p`` against a dense LU of the matrix assembled from ``blk_p`` (default: p).  ``omega``:
-    the state is in the frame turning with omega, whose Coriolis and centrifugal terms add -2 W
-    and -W^2 to every joint's A_v and A_q (as tests/test_newton_structured.py)."""
-    blk_p = p if blk_p is None else blk_p
-    m1 = int(blk_p[L.H_NQT])
-    blk, f1, f2 = nw.workspace(blk_p)
-    assert nw.rod_blocks(y, blk_p, m1, blk) == 0
-    aq, av = _dense_A(blk_p, blk, m1)
-    if omega is not None:
-        W = np.array([[0.0, -omega[2], omega[1]], [omega[2], 0.0, -omega[0]], [-omega[1], omega[0], 0.0]])
-        aq = aq - np.kron(np.eye(m1 // 3), W @ W)
-        av = av - np.kron(np.eye(m1 // 3), 2 * W)
-    rng = np.random.default_rng(seed)
-    out = []
-    for g, fac in ((G_REAL, f1), (G_CPLX, f2)):
-        assert nw.factor(p, blk, g, fac) == 0
-        E = g * np.eye(2 * m1) - np.block([[np.zeros((m1, m1)), np.eye(m1)], [aq, av]])
-        b = rng.normal(size=2 * m1) * (1.0 if fac is f1 else 1.0 + 0.5j)
-        x = b.astype(fac.dtype)
-        nw.solve(p, blk, g, fac, m1, x)
-        xd = np.linalg.solve(E, b)
-        out.append(np.max(np.abs(x - xd)) / np.max(np.abs(xd)))
-    return out
 
 
 def test_forest_layout_has_root_blocks_after_the_rods():
@@ -247,31 +151,6 @@ def test_forest_solve_without_the_second_root_disagrees():
         rels = _solve_vs_dense(bad, y, blk_p=p)
     for rel in rels:
         assert not rel <= 1e-3  # (NaN from the never-solved rows counts as disagreement too)
-
-
-def _runs(prep, m1):
-    runs = {}
-    for kind in ("dense", "structured"):
-        runs[kind] = integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, prep.model.fresh_params(), prep.rtol,
-                               prep.atol, h_max=prep.h_max, max_steps=prep.max_steps, second_order=m1,
-                               newton=kind, **_event_args(prep))  # fmt: skip
-        assert runs[kind].status == 0, runs[kind].message
-    assert runs["structured"].stats["newton_matrix"] == "structured"
-    assert runs["dense"].stats["newton_matrix"] == "dense (requested)"
-    return runs
-
-
-def _assert_runs_agree(prep, runs):
-    # Error budget (as tests/test_newton_rigid.py): each run holds its local error per step below
-    # Hairer's mapped tolerance atol' + rtol' |y_i| (rtol' = 0.1 rtol^(2/3), atol' = atol rtol'/rtol,
-    # radau5.py), so the two differ by at most the sum of both runs' local errors over their steps,
-    # each component in its own unit.
-    a, b = runs["dense"].y, runs["structured"].y
-    rtol_m = 0.1 * prep.rtol ** (2.0 / 3.0)
-    atol_m = prep.atol * (rtol_m / prep.rtol)
-    steps = runs["dense"].stats["n_accepted"] + runs["structured"].stats["n_accepted"]
-    bound = steps * (atol_m + rtol_m * np.maximum(np.abs(a), np.abs(b)))
-    assert np.all(np.abs(a - b) <= bound)
 
 
 def test_structured_and_dense_runs_of_a_forest_agree():

@@ -24,9 +24,11 @@ import pytest
 from tetherlab.formulations.cowell import cowell_rhs
 from tetherlab.integrators import radau5 as r5
 from tetherlab.integrators.driver import integrate
-from tetherlab.pipeline import _event_args, prepare
+from tetherlab.pipeline import prepare
 from tetherlab.scene import load_scene
 from tetherlab.tether import newton as nw
+
+from tests.helpers import assert_runs_agree, dense_and_structured_runs
 from tests.helpers import ROOT
 
 # RADAU5's two shifts at h = 0.5 s (U1/h and (ALPH + i BETA)/h)
@@ -176,27 +178,11 @@ def test_bordered_solve_without_b_w_disagrees():
 @pytest.mark.parametrize("scene, rods, duration", [("rigid-example", 4, "60 s"), ("deorbit-ed-rigid", 4, "600 s"),
                                                     ("rigid-tree", 0, "20 s"), ("hub-spoke-spin", 4, "20 s")])
 def test_structured_and_dense_runs_agree(scene, rods, duration):
+    # Budget (tests/helpers.assert_runs_agree): the sum of both runs' mapped local tolerances over
+    # their steps.  Measured: at most 3e-3 of it on the four scenes; the rod vectors agree to
+    # 2.4e-10 ... 5.3e-7 m.
     prep = _prep(scene, rods, duration)
-    m1 = prep.model.n_qt
-    runs = {}
-    for kind in ("dense", "structured"):
-        p = prep.model.fresh_params()
-        runs[kind] = integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol,
-                               h_max=prep.h_max, max_steps=prep.max_steps, second_order=m1, newton=kind,
-                               **_event_args(prep))  # fmt: skip
-        assert runs[kind].status == 0
-    assert runs["structured"].stats["newton_matrix"] == "structured"
-    a, b = runs["dense"].y, runs["structured"].y
-    # Error budget: each run holds its local error per step below Hairer's mapped tolerance
-    # atol'_i + rtol' |y_i| (rtol' = 0.1 rtol^(2/3), atol' = atol rtol'/rtol: radau5.py), so the
-    # two differ by at most the sum of both runs' local errors over their steps (each component
-    # in its own unit: m, m/s, quaternion, rad/s, N m s).  Measured: at most 3e-3 of this bound on
-    # the four scenes; the rod vectors agree to 2.4e-10 ... 5.3e-7 m.
-    rtol_m = 0.1 * prep.rtol ** (2.0 / 3.0)
-    atol_m = prep.atol * (rtol_m / prep.rtol)
-    steps = runs["dense"].stats["n_accepted"] + runs["structured"].stats["n_accepted"]
-    bound = steps * (atol_m + rtol_m * np.maximum(np.abs(a), np.abs(b)))
-    assert np.all(np.abs(a - b) <= bound)
+    assert_runs_agree(prep, dense_and_structured_runs(prep, prep.model.n_qt))
 
 
 def test_auto_takes_the_bordered_matrix_from_its_rod_count():

@@ -21,6 +21,8 @@ from tetherlab.integrators.driver import integrate
 from tetherlab.system import TetherSpec, build_model, chain_state
 from tetherlab.tether import newton as nw
 
+from tests.helpers import dense_newton_A as _dense_A, structured_vs_dense_lu
+
 SQ3 = np.sqrt(3.0)
 
 
@@ -41,84 +43,11 @@ def _model(kind, gravity, root_fixed, seed=1):
     return model, y
 
 
-def _dense_A(p, blk, m1):
-    """A_q, A_v of the structured matrix for any star or tree of point masses, assembled densely
-    in numpy from the rod blocks and the parameter block's tether table (independent of
-    newton.factor/solve)."""
-    from tetherlab.kernel import layout as L
-
-    offt = int(p[L.H_OFF_TETH])
-    nteth = int(p[L.H_NTETH])
-    fixed = not p[L.H_ROOT_INV_M] > 0
-
-    def joint_of_body(body):
-        if body == 0:
-            return 0
-        tb = offt + (body - 1) * L.TT_SIZE
-        return 3 + 3 * (int(p[tb + L.TT_ROD0]) + int(p[tb + L.TT_NRODS]) - 1)
-
-    T = np.zeros((m1, m1))
-    T[:3, :3] = np.eye(3)
-    M = np.zeros((m1, m1))
-    K = np.zeros((m1, m1))
-    C = np.zeros((m1, m1))
-    M[:3, :3] = np.eye(3) * (1.0 if fixed else p[L.H_ROOT_M])
-    depth = {0: 0}
-    order = []
-    while len(order) < nteth:  # parents before children, for T
-        for k in range(nteth):
-            par = int(p[offt + k * L.TT_SIZE + L.TT_PARENT])
-            if k not in order and par in depth:
-                order.append(k)
-                depth[1 + k] = depth[par] + 1
-    for k in order:
-        tb = offt + k * L.TT_SIZE
-        n, g0 = int(p[tb + L.TT_NRODS]), int(p[tb + L.TT_ROD0])
-        pa = joint_of_body(int(p[tb + L.TT_PARENT]))
-        for i in range(n):
-            g = g0 + i
-            oa, ob = (pa if i == 0 else 3 * g), 3 + 3 * g
-            T[ob : ob + 3] = T[oa : oa + 3]
-            T[ob : ob + 3, ob : ob + 3] += 2 * SQ3 * np.eye(3)
-            b = blk[g]
-            maa, mab, kel, kv = (b[9 * j : 9 * j + 9].reshape(3, 3) for j in range(4))
-            for o, sg, diag, off in ((oa, 1.0, (oa, maa), (ob, mab)), (ob, -1.0, (ob, maa), (oa, mab))):
-                if o == 0 and fixed:
-                    continue
-                M[o : o + 3, diag[0] : diag[0] + 3] += diag[1]
-                M[o : o + 3, off[0] : off[0] + 3] += off[1]
-                K[o : o + 3, oa : oa + 3] -= sg * kel
-                K[o : o + 3, ob : ob + 3] += sg * kel
-                C[o : o + 3, oa : oa + 3] -= sg * kv
-                C[o : o + 3, ob : ob + 3] += sg * kv
-            if i == n - 1:
-                M[ob : ob + 3, ob : ob + 3] += p[tb + L.TT_TIP_M] * np.eye(3)
-    Ti = np.linalg.inv(T)
-    return Ti @ np.linalg.solve(M, K) @ T, Ti @ np.linalg.solve(M, C) @ T
-
-
 def _check_solve_equals_dense_lu(p, y, seed, bound, omega=None):
     """The block-Thomas solve against a dense LU of the same Newton matrix, for the two RADAU5
-    shifts at h = 0.5 s (U1/h and (ALPH + i BETA)/h).  ``omega``: the state is in a frame turning
-    with omega, whose Coriolis and centrifugal terms add -2 W and -W^2 (W = [omega x]) to every
-    joint's A_v and A_q (formulations/cowell_orbit.py)."""
-    m1 = y.size // 2
-    blk, f1, f2 = nw.workspace(p)
-    assert nw.rod_blocks(y, p, m1, blk) == 0
-    aq, av = _dense_A(p, blk, m1)
-    if omega is not None:
-        W = np.array([[0.0, -omega[2], omega[1]], [omega[2], 0.0, -omega[0]], [-omega[1], omega[0], 0.0]])
-        aq = aq - np.kron(np.eye(m1 // 3), W @ W)
-        av = av - np.kron(np.eye(m1 // 3), 2 * W)
-    rng = np.random.default_rng(seed)
-    for g, fac in ((3.6378342527444962 / 0.5, f1), (complex(2.6810828736277523, 3.0504301992474105) / 0.5, f2)):
-        assert nw.factor(p, blk, g, fac) == 0
-        E = g * np.eye(2 * m1) - np.block([[np.zeros((m1, m1)), np.eye(m1)], [aq, av]])
-        b = rng.normal(size=2 * m1) * (1.0 if fac is f1 else 1.0 + 0.5j)
-        x = b.astype(fac.dtype)
-        nw.solve(p, blk, g, fac, m1, x)
-        xd = np.linalg.solve(E, b)
-        assert np.max(np.abs(x - xd)) <= bound * np.max(np.abs(xd))
+    shifts at h = 0.5 s (tests/helpers.structured_vs_dense_lu; ``omega``: a frame turning with it)."""
+    for rel in structured_vs_dense_lu(p, y, seed=seed, omega=omega):
+        assert rel <= bound
 
 
 @pytest.mark.parametrize("root_fixed", [False, True])

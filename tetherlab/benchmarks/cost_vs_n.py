@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from . import print_markdown
+
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "studies" / "scenes" / "bench-libration.toml"
 ORBIT_S = 6335.174182413265  # 2 pi sqrt(a^3/mu) at a = 7400 km (the scene's orbit)
@@ -111,10 +113,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     rows, fits = table(tuple(args.rods), tuple(args.methods), tuple(args.dampings),
                        args.explicit_max_rods)  # fmt: skip
-    keys = list(rows[0])
-    print("| " + " | ".join(keys) + " |\n|" + "---|" * len(keys))
-    for r in rows:
-        print("| " + " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in r.values()) + " |")
+    print_markdown(rows)
     print("\n| method | damping_N_s | rods | exponent of s/orbit vs n | exponent of ms/step |")
     print("|---|---|---|---|---|")
     for f in fits:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from . import print_markdown
 from .cost_vs_n import fit_exponent
 
 DURATION_S = 300.0
@@ -90,11 +91,7 @@ def main(argv=None):
     ap.add_argument("--dense-max-rods", type=int, default=64)
     args = ap.parse_args(argv)
     rows, fits = table(tuple(args.rods), args.dense_max_rods)
-    keys = list(rows[0])
-    print("| " + " | ".join(keys) + " |\n|" + "---|" * len(keys))
-    for r in rows:
-        print("| " + " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in r.values()) + " |",
-              flush=True)  # fmt: skip
+    print_markdown(rows)
     print("\n| newton | rods per tether | exponent of s per simulated s vs n |\n|---|---|---|")
     for f in fits:
         print(f"| {f['newton']} | {f['rods']} | {f['exponent']:.2f} |")

@@ -17,6 +17,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from . import print_markdown
 from .cost_vs_n import fit_exponent
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -78,11 +79,7 @@ def main(argv=None):
     ap.add_argument("--dense-max-rods", type=int, default=128)
     args = ap.parse_args(argv)
     rows, fits = table(tuple(args.rods), tuple(args.scenes), args.dense_max_rods)
-    keys = list(rows[0])
-    print("| " + " | ".join(keys) + " |\n|" + "---|" * len(keys))
-    for r in rows:
-        print("| " + " | ".join(f"{v:.4g}" if isinstance(v, float) else str(v) for v in r.values()) + " |",
-              flush=True)  # fmt: skip
+    print_markdown(rows)
     print("\n| scene | newton | rods | exponent of s per simulated s vs n |\n|---|---|---|---|")
     for f in fits:
         print(f"| {f['scene']} | {f['newton']} | {f['rods']} | {f['exponent']:.2f} |")
