@@ -43,6 +43,12 @@ def _prep(name, rods, duration):
         from tests.test_rigid import rigid_tree_scene
 
         return prepare(rigid_tree_scene().replace(duration=duration))
+    if name == "rigid-forest":
+        # tests/test_newton_forest.py's forest with both a free rigid body (a wheel) and the second
+        # tree's root rigid, its tether attached off its centre: the border over several roots
+        from tests.test_newton_forest import forest_scene
+
+        return prepare(forest_scene(duration=duration, free="rigid", h2_rigid=True))
     sc = load_scene(ROOT / "studies" / "scenes" / f"{name}.toml")
     if name == "hub-spoke-spin":  # four tethers on a hub spinning at 0.1 rad/s, attached 1 m off its centre
         return prepare(sc.replace(duration=duration, **{f"tethers.s{k}.rods": rods for k in range(1, 5)}))
@@ -151,7 +157,8 @@ def _mismatch(prep, y, drop_bw=False, seed=5):
     return out
 
 
-@pytest.mark.parametrize("scene", ["rigid-example", "deorbit-ed-rigid", "rigid-tree", "hub-spoke-spin"])
+@pytest.mark.parametrize("scene", ["rigid-example", "deorbit-ed-rigid", "rigid-tree", "hub-spoke-spin",
+                                   "rigid-forest"])
 def test_bordered_solve_equals_dense_lu(scene):
     prep = _prep(scene, 4, "10 s")
     for res_t, rel in _mismatch(prep, _state(prep)):
