@@ -294,7 +294,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         raise ValueError(f"second_order: expected a bool or an integer M1 with 0 <= 2 M1 <= n = {n}; got {second_order!r}")
     # the structured Newton matrix: y = [q, q'], or y = [q, q', w] with rigid bodies' attitude and
     # wheels as the border (docs/integrators.md section 13)
-    newton_kind, p_struct = _newton_choice(method, newton, p, n, (True if 2 * m1 == n else m1) if m1 > 0 else False)
+    newton_kind, p_struct = _newton_choice(method, newton, p, n, m1)
 
     def new_ws():
         return radau5_workspace(n, m1, p_struct) if method == "radau5" else ()
@@ -450,6 +450,8 @@ def _newton_choice(method, newton, p, n, second_order):
     if newton == "structured":
         raise ValueError(f"newton: 'structured' is not available for this state: {why}")
     return f"dense ({why})", None
+
+
 def _ws_arrays(ws):
     """The workspace's arrays in order, the border's tuple (radau5_workspace) expanded."""
     out = []

@@ -166,7 +166,7 @@ def radau5_workspace(n, m1=0, p=None):
     if m1 < 0 or 2 * m1 > n:
         raise ValueError(f"m1: expected 0 <= m1 <= n/2 = {n / 2:g} (second-order structure); got {m1}")
     structured = p is not None
-    if structured and (m1 == 0 or _nw.structure_supported(p, n, True if 2 * m1 == n else m1)):
+    if structured and (m1 == 0 or _nw.structure_supported(p, n, m1)):
         raise ValueError("p: the structured Newton matrix needs a Cowell tether state with m1 = 3 + 3 rods "
                          "(and n - 2 m1 attitude and wheel components when bodies are rigid)")
     nb = n - 2 * m1 if structured else 0  # border unknowns (docs/integrators.md section 13)

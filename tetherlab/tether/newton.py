@@ -89,14 +89,16 @@ FAC_SIZE = 18
 def structure_supported(p, n_state, second_order):
     """'' if the structured Newton matrix applies to this model and state, else the reason.
 
-    ``second_order``: True for y = [q, q'] (M1 = n/2), or the integer M1 of y = [q, q', w] with a
-    first-order block w (attitude and wheel states of rigid bodies, docs/model.md section 12).
+    ``second_order``: the integer M1 of y = [q, q', w] (True: M1 = n/2, no w), w the first-order
+    block of attitude and wheel states of rigid bodies (docs/model.md section 12).
     Forests (several roots) are supported: the matrix is block diagonal over the trees.
     With rigid bodies (Cowell's inertial formulation) the structured matrix is the
     bordered one of docs/integrators.md section 13: the tether blocks of :func:`solve` with every
     body as a point mass of its translational mass at its joint, bordered by finite-difference
     columns of the w unknowns (tetherlab/integrators/radau5.py, ``_border_*``).
     """
+    if second_order is True:
+        second_order = n_state // 2
     if not second_order:
         return "the state is not declared second order (y = [q, q'])"
     if p.size < H_SIZE or int(p[H_LEN]) != p.size:
@@ -107,21 +109,17 @@ def structure_supported(p, n_state, second_order):
     nrods = int(p[H_NRODS])
     nrigid = int(p[H_NRIGID])
     nroot = int(p[H_NROOT])
-    # q = (r_root0, d_1..d_N, r_root1, ...): one position block per root (tetherlab/system.py)
+    # q = (r_root0, d_1..d_N, r_root1, ...): one position block per root (tetherlab/system.py),
+    # then q', then (rigid bodies only) 7 attitude components per body and the wheels
     m1 = 3 * nroot + 3 * nrods
-    if nrigid == 0 or second_order is True:
-        expect = 2 * m1
-        if (int(p[H_NSTATE]) != n_state or n_state != expect or int(p[H_NQT]) != m1
-                or (second_order is not True and second_order != m1)):  # fmt: skip
-            return (f"state of {n_state} components is not the Cowell tether layout "
-                    f"2*(3*{nroot} + 3*{nrods}) = {expect} (components the structured solver does not know)")
-    else:
-        nw = int(p[H_NSTATE]) - 2 * m1
-        if int(p[H_NSTATE]) != n_state or int(second_order) != m1 or int(p[H_NQT]) != m1 or nw < 7 * nrigid:
-            return (f"state of {n_state} components with M1 = {int(second_order)} is not the Cowell "
-                    f"layout [q, q', attitude, wheels] with M1 = 3*{nroot} + 3*{nrods} = {m1}")
-        if int(p[H_FORM]) != FORM_COWELL:
-            return "rigid bodies in the frame turning with the orbit (the bordered matrix is built for Cowell's inertial frame)"
+    nw = n_state - 2 * m1
+    if (int(p[H_NSTATE]) != n_state or int(second_order) != m1 or int(p[H_NQT]) != m1
+            or (nw != 0 if nrigid == 0 else nw < 7 * nrigid)):  # fmt: skip
+        return (f"state of {n_state} components with M1 = {int(second_order)} is not the Cowell "
+                f"layout [q, q', attitude, wheels] with M1 = 3*{nroot} + 3*{nrods} = {m1} and "
+                f"{nrigid} rigid bodies (components the structured solver does not know)")
+    if nrigid > 0 and int(p[H_FORM]) != FORM_COWELL:
+        return "rigid bodies in the frame turning with the orbit (the bordered matrix is built for Cowell's inertial frame)"
     if nrods < 1:
         return "no rods"
     # Forests: each tether hangs from a root body or from the tip body of another tether, and the
@@ -164,6 +162,13 @@ def workspace(p):
         np.zeros((nrods + nroot, FAC_SIZE)),
         np.zeros((nrods + nroot, FAC_SIZE), dtype=np.complex128),
     )
+
+
+@njit(cache=True)
+def _root(p, i):
+    """(kernel body index, offset of its position block in q) of root i (tetherlab/system.py)."""
+    rb = int(p[int(p[H_OFF_ROOTS]) + i])
+    return rb, int(p[int(p[H_OFF_BODY]) + rb * BT_SIZE + BT_QOFF])
 
 
 @njit(cache=True)
@@ -460,15 +465,13 @@ def solve(p, blk, g, fac, m1, b):
     offo = int(p[H_OFF_ORDER])
     nrods = int(p[H_NRODS])
     nroot = int(p[H_NROOT])
-    offroots = int(p[H_OFF_ROOTS])
-    offb = int(p[H_OFF_BODY])
     ginv = 1.0 / g
     xv = np.empty(m1, dtype=b.dtype)  # T b_v, then the right-hand side s, then w
     xq = np.empty(m1, dtype=b.dtype)  # T b_q
     s = np.zeros(m1, dtype=b.dtype)
     # joint coordinates, parents before children: x_root = r_root, x_B = x_A + 2 sqrt3 d
     for i in range(nroot):
-        qo = int(p[offb + int(p[offroots + i]) * BT_SIZE + BT_QOFF])
+        _, qo = _root(p, i)
         for c in range(3):
             xv[qo + c] = b[m1 + qo + c]
             xq[qo + c] = b[qo + c]
@@ -503,8 +506,7 @@ def solve(p, blk, g, fac, m1, b):
             xm[3 * j + 1] = xv[3 * j + 1] - (wy * wq - ww * q1) * ginv
             xm[3 * j + 2] = xv[3 * j + 2] - (wz * wq - ww * q2) * ginv
     for i in range(nroot):
-        rb = int(p[offroots + i])
-        qo = int(p[offb + rb * BT_SIZE + BT_QOFF])
+        rb, qo = _root(p, i)
         mr = _root_mass(p, rb)
         for c in range(3):
             s[qo + c] = mr * xm[qo + c] if mr > 0.0 else xv[qo + c]
@@ -540,7 +542,7 @@ def solve(p, blk, g, fac, m1, b):
         if free_pa:
             _sub_q_sinv_y(s, pa, fac[g0], s, 3 + 3 * g0)
     for i in range(nroot):
-        qo = int(p[offb + int(p[offroots + i]) * BT_SIZE + BT_QOFF])
+        _, qo = _root(p, i)
         fr = fac[nrods + i]
         y0 = (s[qo], s[qo + 1], s[qo + 2])
         for a in range(3):
@@ -561,7 +563,7 @@ def solve(p, blk, g, fac, m1, b):
                 xv[ob + a] = f[3 * a] * e[0] + f[3 * a + 1] * e[1] + f[3 * a + 2] * e[2]
     # back to q: z_v = T^-1 w, z_q = (b_q + z_v)/g
     for i in range(nroot):
-        qo = int(p[offb + int(p[offroots + i]) * BT_SIZE + BT_QOFF])
+        _, qo = _root(p, i)
         for c in range(3):
             b[m1 + qo + c] = xv[qo + c]
     for k in range(nteth):
