@@ -39,7 +39,7 @@ def _run(k, h, t_stop, adapt=False, tol=1.0, comp=-1, level=0.0, y=None, F=None,
     fix = np.zeros(6)
     st, t, h, head = abm.abm_core(_oscillator, t, y, h, k, F, ws["S"], head, np.zeros(4), tol,
                                   np.full(3, tol), t_stop, comp, level, 2 * math.pi, 10**7, adapt,
-                                  stats, ws["K"], ws["w"], fix)  # fmt: skip
+                                  stats, ws["K"], ws["w"], fix, _oscillator, False)  # fmt: skip
     return st, t, h, head, y, F, stats, fix
 
 

@@ -74,6 +74,7 @@ class Prepared:
     holding_force_N: np.ndarray | None = None
     formulation: str = "cowell"  # "cowell", "cowell-orbit", "dromo-sigma" (point mass) or "dromo-time"
     mu_m3_s2: float = 0.0
+    time_element: str = "none"  # DROMO sigma form: "none" (tau) or "linear" (scene.IntegratorSpec)
 
 
 def _state_of(entity, mu: float):
@@ -327,6 +328,13 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
             "integrator.method", "'abm' only with formulation 'dromo' on a single body without events (the DROMO "
             "sigma form; docs/integrators.md section 8)", f"'abm' with the {formulation} formulation",
         )
+    if scene.integrator.time_element != "none":
+        if formulation != "dromo-sigma":
+            raise SceneError(
+                "integrator.time_element", "'none' unless the formulation is 'dromo' on a single body without events "
+                "(the time element is a variable of DROMO's sigma form; docs/dromo.md section 11)",
+                f"{scene.integrator.time_element!r} with the {formulation} formulation",
+            )  # fmt: skip
     return Prepared(
         model=model,
         y0=y0,
@@ -344,6 +352,7 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
         holding_force_N=holding,
         formulation=formulation,
         mu_m3_s2=mu,
+        time_element=scene.integrator.time_element,
     )
 
 
@@ -837,7 +846,8 @@ def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
     h = prep.y0.size // 2
     length_m = float(np.linalg.norm(prep.y0[:3]))  # L = |r0| (docs/dromo.md section 2)
     if prep.formulation == "dromo-sigma":
-        pe = dromo.attach(p, FORM_DROMO_SIGMA, prep.mu_m3_s2, length_m, prep.y0.size)
+        pe = dromo.attach(p, FORM_DROMO_SIGMA, prep.mu_m3_s2, length_m, prep.y0.size,
+                          dromo.TIME_ELEMENTS[prep.time_element])  # fmt: skip
         res = drive.integrate_sigma(
             prep.method, pe, prep.y0[:3], prep.y0[h : h + 3], prep.t_out, prep.rtol,
             prep.atol[0] / prep.ref_radius_m, prep.mu_m3_s2, length_m, max_steps=prep.max_steps,

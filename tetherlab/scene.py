@@ -281,9 +281,14 @@ class IntegratorSpec:
     # the time form always; "cowell-orbit": Cowell's equations in a frame turning uniformly with
     # the orbit (formulations/cowell_orbit.py), for RADAU5 on many-rod tethers
     formulation: str = "cowell"
+    # DROMO's sigma form (a point mass): "none", state component 0 is the physical time; "linear",
+    # the linear time element (docs/dromo.md section 11: elliptic orbits, fewer steps where the
+    # perturbation is small at apocentre)
+    time_element: str = "none"
 
 
 FORMULATIONS = ("cowell", "dromo", "dromo-time", "cowell-orbit")
+TIME_ELEMENTS = ("none", "linear")
 
 
 @dataclass(frozen=True)
@@ -1457,7 +1462,7 @@ def _parse_stop(value: Any, central: CentralBody) -> Stop:
 
 def _parse_integrator(value: Any) -> IntegratorSpec:
     path = "integrator"
-    table = _table(value, path, ("method", "rtol", "atol", "max_step", "max_steps", "formulation"))
+    table = _table(value, path, ("method", "rtol", "atol", "max_step", "max_steps", "formulation", "time_element"))
     method = _choice(table.get("method", "dop853"), f"{path}.method", INTEGRATOR_METHODS)
     rtol = _number(table.get("rtol", 1e-10), f"{path}.rtol", "a relative tolerance in (0, 1)")
     if not 0.0 < rtol < 1.0:
@@ -1468,7 +1473,8 @@ def _parse_integrator(value: Any) -> IntegratorSpec:
     max_step = _quantity(table["max_step"], f"{path}.max_step", TIME, positive=True) if "max_step" in table else None
     max_steps = _integer(table["max_steps"], f"{path}.max_steps", 1) if "max_steps" in table else None
     formulation = _choice(table.get("formulation", "cowell"), f"{path}.formulation", FORMULATIONS)
-    return IntegratorSpec(method, rtol, atol, max_step, max_steps, formulation)
+    time_element = _choice(table.get("time_element", "none"), f"{path}.time_element", TIME_ELEMENTS)
+    return IntegratorSpec(method, rtol, atol, max_step, max_steps, formulation, time_element)
 
 
 def _parse_output(value: Any, duration_s: float) -> OutputSpec:
@@ -1663,6 +1669,8 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
         integrator["max_steps"] = ig.max_steps
     if ig.formulation != "cowell":
         integrator["formulation"] = ig.formulation
+    if ig.time_element != "none":
+        integrator["time_element"] = ig.time_element
     out["integrator"] = integrator
     if scene.stop is not None and scene.stop.altitude_m is not None:
         out["stop"] = {"altitude": format_si(scene.stop.altitude_m, LENGTH)}

@@ -47,8 +47,8 @@ TARGETS_M = (1.0, 1e-3)
 TOLS = tuple(10.0 ** (-k / 2) for k in range(16, 31))
 #: heyoka double: its tolerance may go down to the double epsilon
 HEYOKA_TOLS = tuple(10.0 ** (-k / 2) for k in range(16, 32)) + (2.220446049250313e-16,)
-CANDIDATES = (("dromo", "dop853"), ("dromo", "vern9"), ("dromo", "abm"), ("cowell", "dop853"),
-              ("cowell", "vern9"))  # fmt: skip
+CANDIDATES = (("dromo", "dop853"), ("dromo", "vern9"), ("dromo", "abm"), ("dromo+te", "dop853"),
+              ("dromo+te", "vern9"), ("dromo+te", "abm"), ("cowell", "dop853"), ("cowell", "vern9"))  # fmt: skip
 
 
 def reference_position_m(case: str = "ex2") -> np.ndarray:
@@ -66,11 +66,13 @@ def runner(formulation: str, method: str, tol: float, case: str = "ex2"):
     from ..pipeline import prepare
     from ..scene import load_scene
 
-    if formulation not in ("cowell", "dromo"):
-        raise ValueError(f"formulation: expected 'cowell' or 'dromo'; got {formulation!r}")
+    if formulation not in ("cowell", "dromo", "dromo+te"):
+        raise ValueError(f"formulation: expected 'cowell', 'dromo' or 'dromo+te'; got {formulation!r}")
+    te = formulation == "dromo+te"  # the sigma form with the linear time element (docs/dromo.md 11)
     scene = load_scene(CASES[case][0]).replace(**{
         "integrator.method": method, "integrator.rtol": tol, "integrator.atol": tol,
-        "integrator.formulation": formulation, "output.count": 2,
+        "integrator.formulation": "dromo" if te else formulation, "output.count": 2,
+        "integrator.time_element": "linear" if te else "none",
     })  # fmt: skip
     prep = prepare(scene)
     h = prep.y0.size // 2
@@ -83,7 +85,8 @@ def runner(formulation: str, method: str, tol: float, case: str = "ex2"):
                             max_steps=prep.max_steps, second_order=True)  # fmt: skip
             return res.y[-1, :3] if res.status == 0 else np.full(3, np.nan), dict(res.stats)
     else:
-        p0 = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
+        p0 = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size,
+                          dromo.TIME_ELEMENTS[prep.time_element])  # fmt: skip
 
         def run():
             res = drive.integrate_sigma(method, p0.copy(), prep.y0[:3], prep.y0[h : h + 3], prep.t_out,

@@ -48,7 +48,13 @@ from ..tether.chain import accelerations
 # a scratch buffer (q, q', acc of the Cowell coordinates) starts at FP_BUF.
 FP_MU, FP_L, FP_T, FP_NCOW, FP_NSTATE = 0, 1, 2, 3, 4
 FP_CLOCK = 5  # sigma form: the output time tau_k = t_k/T the clock event looks for
+FP_TIME = 6  # sigma form: what state component 0 is (TIME_PHYSICAL or TIME_LINEAR)
 FP_BUF = 8
+#: sigma form, state component 0: the physical time tau = t/T (sheet s6(a)), or the linear time
+#: element tau_l = tau + Phi/n (sheet s6(b), docs/dromo.md section 11), elliptic orbits only
+TIME_PHYSICAL, TIME_LINEAR = 0, 1
+#: scene names of the two (``integrator.time_element``)
+TIME_ELEMENTS = {"none": TIME_PHYSICAL, "linear": TIME_LINEAR}
 N_EL = 7  # q1 q2 q3 eta1 eta2 eta3 eta4
 TWO_PI = 2.0 * math.pi
 
@@ -93,6 +99,53 @@ def geometry(sigma, y):
     jy = -sn * xy + c * yy
     jz = -sn * xz + c * yz
     return c, sn, s, kap, ix, iy, iz, jx, jy, jz, kx, ky, kz
+
+
+@njit(cache=True, inline="always")
+def kepler_phase(c, sn, q1, q2, q3):
+    """(Phi/n, Phi, n, w, s, kappa) of the linear time element (sheet s6(b); docs/dromo.md 11):
+    w = sqrt(1 - q1^2 - q2^2), n = q3^3 w^3 the mean motion, Phi = 2 atan2(kappa, s + w) +
+    w kappa/s (= f - E + e sin E, the Kepler part of t measured from the ideal axis), so that
+    tau = tau_l - Phi/n.  c, sn = cos sigma, sin sigma.  NaN for e >= 1 (w undefined)."""
+    s = 1.0 + q1 * c + q2 * sn
+    kap = q1 * sn - q2 * c
+    w = math.sqrt(1.0 - q1 * q1 - q2 * q2)
+    n = q3 * q3 * q3 * w * w * w
+    phi = 2.0 * math.atan2(kap, s + w) + w * kap / s
+    return phi / n, phi, n, w, s, kap
+
+
+@njit(cache=True)
+def physical_tau(sigma, y, mode):
+    """The non-dimensional physical time tau = t/T of a sigma-form state y (component 0: tau
+    itself, or the linear time element, ``mode`` TIME_PHYSICAL / TIME_LINEAR)."""
+    if mode == TIME_PHYSICAL:
+        return y[0]
+    return y[0] - kepler_phase(math.cos(sigma), math.sin(sigma), y[1], y[2], y[3])[0]
+
+
+@njit(cache=True, inline="always")
+def _linear_element_rate(c, sn, y, dy, pn, n, w, s, kap):
+    """d tau_l / d sigma = 1/n + grad_q(Phi/n) . q' (sheet s6(b)), from the element rates already
+    in dy[1:4], and :func:`kepler_phase`'s Phi/n, n, w, s, kappa.  The Kepler part of dtau/dsigma
+    = 1/(q3^3 s^2), sharply peaked at apocentre (1/s^2), cancels analytically into 1/n; what is
+    left is proportional to the perturbation."""
+    q1 = y[1]
+    q2 = y[2]
+    q3 = y[3]
+    sw = s + w
+    den = sw * sw + kap * kap
+    w1 = -q1 / w
+    w2 = -q2 / w
+    # kappa_1 = sin, kappa_2 = -cos, s_1 = cos, s_2 = sin (derivatives with respect to q1, q2)
+    ks = w * kap / (s * s)
+    f1 = 2.0 * (sw * sn - kap * (c + w1)) / den + (w1 * kap + w * sn) / s - ks * c
+    f2 = 2.0 * (-sw * c - kap * (sn + w2)) / den + (w2 * kap - w * c) / s - ks * sn
+    iw2 = 3.0 * pn / (w * w)
+    g1 = f1 / n + iw2 * q1
+    g2 = f2 / n + iw2 * q2
+    g3 = -3.0 * pn / q3
+    dy[0] = 1.0 / n + g1 * dy[1] + g2 * dy[2] + g3 * dy[3]
 
 
 @njit(cache=True)
@@ -182,10 +235,18 @@ def dromo_sigma_rhs(sigma, y_ptr, dy_ptr, p_ptr):
     q3 = y[3]
     s = 1.0 + y[1] * c + y[2] * sn
     k = (L * L / mu) / (m0 * (q3 * q3 * q3 * s * s * q3 * s))
+    linear = p[off + FP_TIME] == TIME_LINEAR
+    tau = y[0]
+    pn = n = w = s_ = kap = 1.0
+    if linear:  # tau = tau_l - Phi/n: off the force's path unless an effect depends on time
+        pn, phi, n, w, s_, kap = kepler_phase(c, sn, y[1], y[2], q3)
+        tau -= pn
     # central gravity is the Kepler part DROMO integrates analytically: only the rest is evaluated
-    fx, fy, fz = _body_force_inlined(p, T * y[0], 0, rx, ry, rz, vx, vy, vz, m0, False)
+    fx, fy, fz = _body_force_inlined(p, T * tau, 0, rx, ry, rz, vx, vy, vz, m0, False)
     _scaled_rates(c, sn, y, (fx * ix + fy * iy + fz * iz) * k, (fx * jx + fy * jy + fz * jz) * k,
                   (fx * kx + fy * ky + fz * kz) * k, dy)  # fmt: skip
+    if linear:
+        _linear_element_rate(c, sn, y, dy, pn, n, w, s_, kap)
     return 0
 
 
@@ -378,6 +439,19 @@ def dromo_to_cartesian(sigma: float, elements, mu_m3_s2: float, length_m: float)
     return r, v
 
 
+def sigma_state(r_m, v_m_s, mu_m3_s2: float, length_m: float, sigma0: float = 0.0, tau0: float = 0.0,
+                time_element: int = TIME_PHYSICAL) -> np.ndarray:  # fmt: skip
+    """The sigma form's initial state [tau or tau_l, q1, q2, q3, eta1..eta4] at time tau0 = t0/T."""
+    el = cartesian_to_dromo(r_m, v_m_s, mu_m3_s2, length_m, sigma0)
+    z = np.concatenate([[tau0], el])
+    if time_element == TIME_LINEAR:
+        e2 = float(el[0] * el[0] + el[1] * el[1])
+        if not e2 < 1.0:
+            raise ValueError(f"the linear time element needs an elliptic orbit; got e = {math.sqrt(e2):.6g}")
+        z[0] = tau0 + kepler_phase(math.cos(sigma0), math.sin(sigma0), float(el[0]), float(el[1]), float(el[2]))[0]
+    return z
+
+
 def dt_dsigma(sigma: float, z, T: float) -> float:
     """dt/dsigma = T r^2/h = T / (q3^3 s^2) (s), the Newton derivative of the time search."""
     s = 1.0 + z[1] * math.cos(sigma) + z[2] * math.sin(sigma)
@@ -415,10 +489,14 @@ def predicted_sigma(elements, sigma0: float, t_s: float, T: float) -> float:
 # ------------------------------------------------------------------------------------------------
 # parameter block
 # ------------------------------------------------------------------------------------------------
-def attach(p: np.ndarray, form: int, mu_m3_s2: float, length_m: float, n_cowell: int) -> np.ndarray:
-    """A copy of the model's parameter block with the DROMO block appended (header H_OFF_FORM)."""
+def attach(p: np.ndarray, form: int, mu_m3_s2: float, length_m: float, n_cowell: int,
+           time_element: int = TIME_PHYSICAL) -> np.ndarray:  # fmt: skip
+    """A copy of the model's parameter block with the DROMO block appended (header H_OFF_FORM).
+    ``time_element``: what the sigma form's state component 0 is (TIME_PHYSICAL or TIME_LINEAR)."""
     if form not in (FORM_DROMO_SIGMA, FORM_DROMO_TIME):
         raise ValueError(f"form: expected FORM_DROMO_SIGMA or FORM_DROMO_TIME; got {form!r}")
+    if time_element not in (TIME_PHYSICAL, TIME_LINEAR) or (form == FORM_DROMO_TIME and time_element != TIME_PHYSICAL):
+        raise ValueError(f"time_element: expected TIME_PHYSICAL, or TIME_LINEAR with the sigma form; got {time_element!r}")
     L, T = units(mu_m3_s2, length_m)
     h = n_cowell // 2
     n_state = 8 if form == FORM_DROMO_SIGMA else 8 + 2 * (h - 3)
@@ -429,6 +507,7 @@ def attach(p: np.ndarray, form: int, mu_m3_s2: float, length_m: float, n_cowell:
     block[FP_T] = T
     block[FP_NCOW] = n_cowell
     block[FP_NSTATE] = n_state
+    block[FP_TIME] = time_element
     out = np.concatenate([p, block])
     out[H_LEN] = out.size
     out[H_OFF_FORM] = off

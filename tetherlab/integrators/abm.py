@@ -137,7 +137,7 @@ def workspace(n: int) -> dict:
     """Arrays the kernels need for a state of length n (``fix``: the level-stop values and the
     step-size window, carried between calls)."""
     return {"F": np.zeros((KMAX, n)), "S": np.zeros((KMAX, n)), "K": np.empty((K_ROWS, n)),
-            "w": np.empty((4, n)), "fix": np.zeros(6)}  # fmt: skip
+            "w": np.empty((2, n)), "fix": np.zeros(6)}  # fmt: skip
 
 
 @njit(cache=True)
@@ -179,61 +179,31 @@ def abm_start(rhs, t, y, h, k, F, S, p, K, w, nsub, stats):
 
 
 @njit(cache=True)
-def abm_step(rhs, t, y, h, k, F, head, p, ab, am, rtol, atol, yp, yc, fnew, stats):
-    """One PECE step (module docstring) into yc, f_{n+1} into fnew; the history F is a ring of k
-    slots with f_n at ``head``.  Returns (status, err): err the weighted RMS of yc - yp."""
-    n = y.shape[0]
-    for i in range(n):
-        acc = 0.0
-        slot = head
-        for j in range(k):
-            acc += ab[j] * F[slot, i]
-            slot -= 1
-            if slot < 0:
-                slot += k
-        yp[i] = y[i] + h * acc
-    st = rhs(t + h, ptr(yp), ptr(fnew), ptr(p))
-    stats[ST_NRHS] += 1
-    if st != 0:
-        stats[ST_RHS_STATUS] = st
-        return RHS_FAILED, 0.0
-    err = 0.0
-    for i in range(n):
-        acc = am[0] * fnew[i]
-        slot = head
-        for j in range(1, k + 1):
-            acc += am[j] * F[slot, i]
-            slot -= 1
-            if slot < 0:
-                slot += k
-        v = y[i] + h * acc
-        yc[i] = v
-        d = (v - yp[i]) / (atol[i] + rtol * max(abs(y[i]), abs(v)))
-        err += d * d
-    err = np.sqrt(err / n)
-    st = rhs(t + h, ptr(yc), ptr(fnew), ptr(p))
-    stats[ST_NRHS] += 1
-    if st != 0:
-        stats[ST_RHS_STATUS] = st
-        return RHS_FAILED, err
-    if not (err == err and all_finite(yc)):
-        return NON_FINITE, err
-    return OK, err
+def _stop_value(event, use_event, t, y, comp, level, p, g):
+    """The stop function, >= 0 once the stop is reached: ``event``'s first component g(t, y)
+    (``use_event``; a cfunc with the rhs signature writing into g), else y[comp] - level."""
+    if use_event:
+        event(t, ptr(y), ptr(g), ptr(p))
+        return g[0]
+    return y[comp] - level
 
 
 @njit(cache=True)
 def abm_core(rhs, t, y, h, k, F, S, head, p, rtol, atol, t_stop, comp, level, window, max_steps,
-             adapt, stats, K, w, fix):  # fmt: skip
+             adapt, stats, K, w, fix, event, use_event):  # fmt: skip
     """Constant-step ABM PECE of order k from (t, y) with history F (ring head ``head``).
 
     ``head < 0``: no history yet; the starting procedure runs first, always to its end (so
     outputs never change the path), keeping its states in S.  Stops (history kept, so a later
     call resumes bit-for-bit):
-    * status LEVEL_START when y[comp] >= ``level`` already (passed inside the last starting
+    The stop (comp >= 0) is y[comp] >= ``level``, or with ``use_event`` g(t, y) >= 0 for the
+    cfunc ``event`` (rhs signature, first component; a stop that is not one state component, e.g.
+    DROMO's physical time through a time element):
+    * status LEVEL_START when the stop holds already (passed inside the last starting
       procedure): the bracket is S[j-1], S[j] with j = fix[5] (at t_s + (j-1) h, t_s = fix[4]),
-      fix[0] = S[j, comp];
-    * status LEVEL when a step would take y[comp] to >= ``level`` (comp >= 0): y, t are the step's
-      start, ``fix[0]`` = y[comp] after the step, fix[1] its derivative (for locating the level);
+      fix[0] = S[j, comp] (with ``use_event``: g at S[j]);
+    * status LEVEL when a step would reach the stop: y, t are the step's start, ``fix[0]`` =
+      y[comp] after the step (with ``use_event``: g after it), fix[1] = f[comp] there;
       ``fix`` (float64[6]) also carries the step-size window between calls (fix[2:4]);
     * status OK when the next step would pass t_stop (the caller lands on it);
     * status 1 (MAX_STEPS) after ``max_steps`` accepted steps.
@@ -243,9 +213,16 @@ def abm_core(rhs, t, y, h, k, F, S, head, p, rtol, atol, t_stop, comp, level, wi
     n = y.shape[0]
     ab = AB_TABLE[k]
     am = AM_TABLE[k]
-    yp = w[2]
-    yc = w[3]
+    # separate allocations, not rows of one workspace: the compiler may then assume they do not
+    # overlap, keep the sums in registers and vectorise them (rows of w halved the step's speed)
+    yp = np.empty(n)
+    yc = np.empty(n)
+    pa = np.empty(n)
+    ca = np.empty(n)
     fnew = np.empty(n)
+    gbuf = np.empty(1)
+    gv = -1.0
+    a0 = am[0]
     expo = 1.0 / (k + 1)
     n_acc = 0
     n_bad = 0
@@ -265,23 +242,65 @@ def abm_core(rhs, t, y, h, k, F, S, head, p, rtol, atol, t_stop, comp, level, wi
             head = k - 1
             win_start = t
             win_max = 0.0
-        if comp >= 0 and y[comp] >= level:
+        if comp >= 0 and _stop_value(event, use_event, t, y, comp, level, p, gbuf) >= 0.0:
             # the level was passed inside the last starting procedure: the bracket S[j-1], S[j]
             j = 1
-            while j < k - 1 and S[j, comp] < level:
+            gj = _stop_value(event, use_event, fix[4] + j * h, S[j], comp, level, p, gbuf)
+            while j < k - 1 and gj < 0.0:
                 j += 1
-            fix[0] = S[j, comp]
+                gj = _stop_value(event, use_event, fix[4] + j * h, S[j], comp, level, p, gbuf)
+            fix[0] = gj if use_event else S[j, comp]
             fix[5] = j
             fix[2] = win_start
             fix[3] = win_max
             return LEVEL_START, t, h, head
-        fix[2] = win_start
-        fix[3] = win_max
-        if n_acc >= max_steps:
-            return 1, t, h, head
-        if t + h > t_stop:
-            return OK, t, h, head
-        st, err = abm_step(rhs, t, y, h, k, F, head, p, ab, am, rtol, atol, yp, yc, fnew, stats)
+        if n_acc >= max_steps or t + h > t_stop:
+            fix[2] = win_start
+            fix[3] = win_max
+            return (1 if n_acc >= max_steps else OK), t, h, head
+        # ---- one PECE step (module docstring) into yc, f_{n+1} into fnew.  Written out here: as
+        # a function (even IR-inlined) it ran at half this speed (docs/integrators.md section 8).
+        # Both history sums in one pass before the first evaluation, from the oldest value to the
+        # newest, one history row at a time: the n components are independent accumulators (no
+        # chain through the k terms; the row loop vectorises), and f_n, which the previous step's
+        # last evaluation produced, enters last, so the predictor waits for it by one multiply-add.
+        # The corrector's old part (all but AM_0 f^P) is ready while f(y^P) is evaluated.
+        for i in range(n):
+            pa[i] = 0.0
+            ca[i] = 0.0
+        for j in range(k - 1, -1, -1):  # age j: f_{n-j} in slot head - j (mod k), oldest first
+            slot = head - j
+            if slot < 0:
+                slot += k
+            b = ab[j]
+            c = am[j + 1]
+            for i in range(n):
+                f = F[slot, i]
+                pa[i] += b * f
+                ca[i] += c * f
+        for i in range(n):
+            yp[i] = y[i] + h * pa[i]
+        st = rhs(t + h, ptr(yp), ptr(fnew), ptr(p))
+        stats[ST_NRHS] += 1
+        err = 0.0
+        if st == 0:
+            for i in range(n):
+                v = y[i] + h * (ca[i] + a0 * fnew[i])
+                yc[i] = v
+                d = (v - yp[i]) / (atol[i] + rtol * max(abs(y[i]), abs(v)))
+                err += d * d
+            err = np.sqrt(err / n)  # weighted RMS of y_{n+1} - y^P (the predictor's error)
+            st = rhs(t + h, ptr(yc), ptr(fnew), ptr(p))
+            stats[ST_NRHS] += 1
+        if st != 0:
+            stats[ST_RHS_STATUS] = st
+            st = RHS_FAILED
+        elif not (err == err and all_finite(yc)):
+            st = NON_FINITE
+        # ---- end of the step
+        if st != OK:
+            fix[2] = win_start
+            fix[3] = win_max
         if st == NON_FINITE and adapt and n_bad < MAX_BAD_TRIALS:
             # a blow-up (the step outside the method's small stability region): as a rejection
             n_bad += 1
@@ -299,8 +318,15 @@ def abm_core(rhs, t, y, h, k, F, S, head, p, rtol, atol, t_stop, comp, level, wi
                 return STEP_UNDERFLOW, t, h, head
             head = -1  # restart from (t, y): y is still y_n
             continue
-        if comp >= 0 and yc[comp] >= level:
-            fix[0] = yc[comp]
+        # the stop test, written out (a call here, like the step's, slowed the loop)
+        if comp >= 0:
+            if use_event:
+                event(t + h, ptr(yc), ptr(gbuf), ptr(p))
+                gv = gbuf[0]
+            else:
+                gv = yc[comp] - level
+        if comp >= 0 and gv >= 0.0:
+            fix[0] = gv if use_event else yc[comp]
             fix[1] = fnew[comp]
             fix[2] = win_start
             fix[3] = win_max

@@ -29,15 +29,18 @@ from numba import carray
 from .._jit import njit, rhs_cfunc
 from ..formulations.dromo import (
     FP_CLOCK,
+    FP_TIME,
+    TIME_LINEAR,
     TWO_PI,
-    cartesian_to_dromo,
     cowell_state,
     dromo_sigma_rhs,
     dromo_time_events,
     dromo_time_rhs,
     dromo_to_cartesian,
     dt_dsigma,
+    physical_tau,
     predicted_sigma,
+    sigma_state,
     time_state,
     units,
 )
@@ -68,10 +71,29 @@ GRID_PER_REV = 8
 @rhs_cfunc
 def dromo_clock_event(sigma, y_ptr, g_ptr, p_ptr):
     """Event g = tau - tau_k (tau_k at p[off + FP_CLOCK]): the sigma at which the physical time
-    reaches an output time (the sigma form's outputs, :func:`integrate_sigma`)."""
+    reaches an output time (the sigma form's outputs, :func:`integrate_sigma`); tau from the
+    state's component 0, itself or through the linear time element (p[off + FP_TIME])."""
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     g = carray(g_ptr, (1,))
-    g[0] = y_ptr[0] - p[int(p[H_OFF_FORM]) + FP_CLOCK]
+    y = carray(y_ptr, (8,))
+    off = int(p[H_OFF_FORM])
+    tk = p[off + FP_CLOCK]
+    if p[off + FP_TIME] == TIME_LINEAR:
+        # tau = tau_l - Phi/n with |Phi| < pi + 1 (|2 atan2(kappa, s + w)| < pi as s + w > 0, and
+        # |w kappa/s| = |e sin E| <= 1): while tau_l + (pi + 1)/n < tau_k the time is surely
+        # short of the output, and that bound (negative) is returned without the trigonometry
+        # and the atan2 of the exact value.  It is exact wherever |g| < (pi + 1 - |Phi|)/n, so
+        # near every root; the ABM loop tests the event after every step (docs/dromo.md 11).
+        q1 = y[1]
+        q2 = y[2]
+        q3 = y[3]
+        w = math.sqrt(1.0 - q1 * q1 - q2 * q2)
+        n = q3 * q3 * q3 * w * w * w
+        lead = (tk - y[0]) * n - (math.pi + 1.0)  # > 0: tau_l + (pi + 1)/n < tau_k
+        if lead > 0.0:
+            g[0] = -lead / n
+            return 0
+    g[0] = physical_tau(sigma, y, int(p[off + FP_TIME])) - tk
     return 0
 
 
@@ -90,6 +112,7 @@ def _clock_run(kind, rhs, event, sig, z, h, targets, k, p, rtol, atol, sig_max, 
     """
     n = z.shape[0]
     off = int(p[H_OFF_FORM])
+    mode = int(p[off + FP_TIME])
     m = targets.shape[0]
     ev = np.zeros(4)
     tout = np.empty(1)
@@ -99,7 +122,7 @@ def _clock_run(kind, rhs, event, sig, z, h, targets, k, p, rtol, atol, sig_max, 
     znew = np.empty(n)
     acc0 = stats[ST_ACCEPTED]
     while k < m:
-        if targets[k] <= z[0]:  # an output at the start time
+        if targets[k] <= physical_tau(sig, z, mode):  # an output at the start time
             out_sig[k] = sig
             out_z[k, :] = z
             k += 1
@@ -138,26 +161,31 @@ ABM_LANDING_ITERS = 8
 
 
 @njit(cache=True)
-def _abm_clock_run(rhs, order, sig, z, h, F, S, head, targets, k, p, rtol, atol, max_steps, out_sig,
-                   out_z, stats, K, w, fix):  # fmt: skip
+def _abm_clock_run(rhs, event, order, sig, z, h, F, S, head, targets, k, p, rtol, atol, max_steps,
+                   out_sig, out_z, stats, K, w, fix):  # fmt: skip
     """Sigma-form outputs k, k+1, ... with the constant-step ABM method (compiled loop).
 
-    :func:`tetherlab.integrators.abm.abm_core` runs until the step in which tau would pass
-    targets[k] (status LEVEL: land from the step's start (sig, z)), or reports that it was passed
-    inside its last starting procedure (LEVEL_START: land from the starting state before it,
-    kept in S).  A Vern9 step of length d lands on it, d by Newton on tau(sig + d) = targets[k]
-    with dtau/dsigma = 1/(q3^3 s^2) (sheet s5).  The ABM run then resumes with its history:
-    outputs do not move the path.  The time residual left after the last Newton step is the
-    caller's (Kepler drift, as with :func:`_clock_run`).  Returns (status, sig, h, head, k)."""
+    :func:`tetherlab.integrators.abm.abm_core` runs until the step in which the clock ``event``
+    g = tau - targets[k] (:func:`dromo_clock_event`, an argument so that this loop is cached: tau from the state, itself or through the
+    linear time element) would become >= 0 (status LEVEL: land from the step's start (sig, z)), or
+    reports that it was passed inside its last starting procedure (LEVEL_START: land from the
+    starting state before it, kept in S).  A Vern9 step of length d lands on it, d by Newton on
+    tau(sig + d) = targets[k] with dtau/dsigma = 1/(q3^3 s^2) (sheet s5).  The ABM run then
+    resumes with its history: outputs do not move the path.  The time residual left after the
+    last Newton step is the caller's (Kepler drift, as with :func:`_clock_run`).  Returns
+    (status, sig, h, head, k)."""
     n = z.shape[0]
     m = targets.shape[0]
+    off = int(p[H_OFF_FORM])
+    mode = int(p[off + FP_TIME])
     ys = np.empty(n)
     zn = np.empty(n)
     z0 = np.empty(n)
     acc0 = stats[ST_ACCEPTED]
     while k < m:
         tk = targets[k]
-        if head < 0 and tk <= z[0]:  # an output at the start state (nothing integrated yet)
+        p[off + FP_CLOCK] = tk
+        if head < 0 and tk <= physical_tau(sig, z, mode):  # an output at the start state
             out_sig[k] = sig
             out_z[k, :] = z
             k += 1
@@ -166,7 +194,8 @@ def _abm_clock_run(rhs, order, sig, z, h, F, S, head, targets, k, p, rtol, atol,
         if left <= 0:
             return MAX_STEPS_STATUS, sig, h, head, k
         st, sig, h, head = _abm.abm_core(rhs, sig, z, h, order, F, S, head, p, rtol, atol, 1e300,
-                                         0, tk, TWO_PI, left, True, stats, K, w, fix)  # fmt: skip
+                                         0, 0.0, TWO_PI, left, True, stats, K, w, fix,
+                                         event, True)  # fmt: skip
         if st == _abm.LEVEL:
             s0 = sig
             for i in range(n):
@@ -178,7 +207,9 @@ def _abm_clock_run(rhs, order, sig, z, h, F, S, head, targets, k, p, rtol, atol,
                 z0[i] = S[j - 1, i]
         else:
             return st, sig, h, head, k
-        d = h * (tk - z0[0]) / (fix[0] - z0[0])
+        # fix[0]: g after the bracket; g0 before it (< 0): the secant guess of the landing step
+        g0 = physical_tau(s0, z0, mode) - tk
+        d = h * (-g0) / (fix[0] - g0)
         d_used = d
         for _ in range(ABM_LANDING_ITERS):
             d_used = d
@@ -188,7 +219,7 @@ def _abm_clock_run(rhs, order, sig, z, h, F, S, head, targets, k, p, rtol, atol,
                     stats[ST_RHS_STATUS] = st2
                     return RHS_FAILED_STATUS, sig, h, head, k
                 return NON_FINITE_STATUS, sig, h, head, k
-            g = zn[0] - tk
+            g = physical_tau(s0 + d, zn, mode) - tk
             c = math.cos(s0 + d)
             sn = math.sin(s0 + d)
             s = 1.0 + zn[1] * c + zn[2] * sn
@@ -205,6 +236,11 @@ def _abm_clock_run(rhs, order, sig, z, h, F, S, head, targets, k, p, rtol, atol,
 # ------------------------------------------------------------------------------------------------
 # integration
 # ------------------------------------------------------------------------------------------------
+def _time_mode(p_ext) -> int:
+    """The sigma form's time variable set by :func:`formulations.dromo.attach` (FP_TIME)."""
+    return int(p_ext[int(p_ext[H_OFF_FORM]) + FP_TIME])
+
+
 _STAT_KEYS = ("n_accepted", "n_rejected", "n_rhs", "n_jac", "n_lu")
 
 
@@ -280,8 +316,9 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
     from ..integrators.driver import warm_up
 
     L, T = units(mu, length_m)
-    el0 = cartesian_to_dromo(r0_m, v0_m_s, mu, length_m, sigma0)
-    z = np.concatenate([[0.0], el0])
+    mode = _time_mode(p_ext)
+    z = sigma_state(r0_m, v0_m_s, mu, length_m, sigma0, 0.0, mode)
+    el0 = z[1:]
     atol_v = np.full(8, float(atol))
     targets = tt / T
     # a sigma bound past the last output (extended by a revolution whenever it is reached first)
@@ -303,9 +340,9 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
     while k < m:
         acc = int(stats[ST_ACCEPTED])
         if is_abm:
-            status, sig, h, head, k = _abm_clock_run(dromo_sigma_rhs, ABM_ORDER, sig, z, h, ws["F"],
-                                                     ws["S"], head, targets, k, p_ext, float(rtol), atol_v,
-                                                     min(CLOCK_CHUNK_STEPS, budget), out_sig, out_z,
+            status, sig, h, head, k = _abm_clock_run(dromo_sigma_rhs, dromo_clock_event, ABM_ORDER, sig, z, h,
+                                                     ws["F"], ws["S"], head, targets, k, p_ext, float(rtol),
+                                                     atol_v, min(CLOCK_CHUNK_STEPS, budget), out_sig, out_z,
                                                      stats, ws["K"], ws["w"], ws["fix"])  # fmt: skip
         else:
             status, sig, h, k, sig_max = _clock_run(kind, dromo_sigma_rhs, dromo_clock_event, sig, z,
@@ -314,14 +351,15 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
                                                     out_z, stats)  # fmt: skip
         budget -= int(stats[ST_ACCEPTED]) - acc
         if progress is not None:
-            progress(float(z[0] * T))
+            progress(float(physical_tau(sig, z, mode) * T))
         if status != OK_STATUS and (status != MAX_STEPS_STATUS or budget <= 0):
             break
     wall = time.perf_counter() - t0
     rows = []
+    tau_out = np.array([physical_tau(float(out_sig[j]), out_z[j], mode) for j in range(k)])
     for j in range(k):
         r, v = dromo_to_cartesian(float(out_sig[j]), out_z[j, 1:8], mu, length_m)
-        g = float(tt[j] - out_z[j, 0] * T)
+        g = float(tt[j] - tau_out[j] * T)
         a = -mu * r / float(r @ r) ** 1.5
         rows.append(np.concatenate([r + v * g + 0.5 * a * g * g, v + a * g]))
     Y = np.array(rows).reshape(k, 6)
@@ -330,12 +368,13 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
           "wall_s": wall, "compile_s": compile_s, "sigma_end": float(sig),
           # the landing steps, one per output after the start (their rhs calls are in n_rhs)
           "search_n_accepted": int(np.count_nonzero(out_sig[:k] != sigma0)),
-          "time_residual_max_s": float(np.max(np.abs(tt[:k] - out_z[:k, 0] * T))) if k else 0.0}  # fmt: skip
+          "time_residual_max_s": float(np.max(np.abs(tt[:k] - tau_out * T))) if k else 0.0}  # fmt: skip
     if k == m:
         status, message = 0, f"reached t={tt[-1]!r} (sigma form, sigma={out_sig[-1]:.6f})"
     else:
-        message = status_message(int(status), float(z[0] * T), h, int(stats[5]), 0, int(max_steps))
-        message += f" (sigma form: sigma={sig!r}, t={z[0] * T!r} s)"
+        t_now = float(physical_tau(sig, z, mode) * T)
+        message = status_message(int(status), t_now, h, int(stats[5]), 0, int(max_steps))
+        message += f" (sigma form: sigma={sig!r}, t={t_now!r} s)"
     r_end, v_end = dromo_to_cartesian(float(sig), z[1:8], mu, length_m)
     return IntegrationResult(t=tt[:k].copy(), y=Y, status=int(status), message=message,
                              t_end=float(tt[k - 1]) if k else 0.0,
@@ -349,8 +388,9 @@ def _integrate_sigma_grid(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, lengt
     from ..integrators.driver import IntegrationResult, integrate
 
     L, T = units(mu, length_m)
-    el0 = cartesian_to_dromo(r0_m, v0_m_s, mu, length_m, sigma0)
-    z0 = np.concatenate([[0.0], el0])
+    mode = _time_mode(p_ext)
+    z0 = sigma_state(r0_m, v0_m_s, mu, length_m, sigma0, 0.0, mode)
+    el0 = z0[1:]
     atol_v = np.full(8, float(atol))
     t_last = float(tt[-1])
     dsig = TWO_PI / grid_per_rev
@@ -375,17 +415,17 @@ def _integrate_sigma_grid(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, lengt
         sig_grid.append(res.t)
         z_grid.append(res.y)
         if progress is not None and len(res.t):
-            progress(float(res.y[-1, 0] * T))
+            progress(float(physical_tau(float(res.t[-1]), res.y[-1], mode) * T))
         if res.status != 0:
             status, message = res.status, res.message
             break
-        if res.y[-1, 0] * T >= t_last or budget <= 0:
+        if physical_tau(float(res.t[-1]), res.y[-1], mode) * T >= t_last or budget <= 0:
             break
         start_sig, start_z = float(res.t[-1]), res.y[-1].copy()
         sig_end = start_sig + TWO_PI
     S = np.concatenate(sig_grid)
     Z = np.concatenate(z_grid)
-    tg = Z[:, 0] * T
+    tg = np.array([physical_tau(float(a), b, mode) for a, b in zip(S, Z)]) * T
     if not np.all(np.diff(tg) > 0):
         status = status or 4
         message = message or "time did not increase along sigma (h -> 0 or s <= 0: DROMO singular)"
@@ -402,7 +442,7 @@ def _integrate_sigma_grid(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, lengt
             sig_k, z_k, g = float(S[j]), Z[j], tk - tg[j]
         else:
             sig_k, z_k, g, nn, st = _solve_time(method, p_ext, float(S[j]), Z[j], float(S[j + 1] - S[j]),
-                                                tk, T, rtol, atol_v, search)  # fmt: skip
+                                                tk, T, rtol, atol_v, search, mode)  # fmt: skip
             n_newton += nn
             if st != 0:
                 status, message = st, f"time search near t={tk!r} s failed (status {st})"
@@ -425,13 +465,14 @@ def _integrate_sigma_grid(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, lengt
                              y_end=np.concatenate([r_end, v_end]), stats=stats)  # fmt: skip
 
 
-def _solve_time(method, p_ext, sig_a, z_a, width, tk, T, rtol, atol_v, stats):
+def _solve_time(method, p_ext, sig_a, z_a, width, tk, T, rtol, atol_v, stats, mode):
     """sigma in (sig_a, sig_a + width] with t(sigma) = tk: safeguarded Newton whose evaluations
-    integrate from the grid state (sig_a, z_a).  Returns (sigma, z, tk - t(sigma), evals, status)."""
+    integrate from the grid state (sig_a, z_a).  Returns (sigma, z, tk - t(sigma), evals, status).
+    ``mode``: the state's time variable (:func:`physical_tau`)."""
     from ..integrators.driver import integrate
 
     lo, hi = 0.0, width
-    d = (tk - z_a[0] * T) / dt_dsigma(sig_a, z_a, T)
+    d = (tk - physical_tau(sig_a, z_a, mode) * T) / dt_dsigma(sig_a, z_a, T)
     if not lo < d < hi:
         d = 0.5 * (lo + hi)
     tol = 4.0 * np.finfo(float).eps * max(abs(tk), T)
@@ -443,7 +484,7 @@ def _solve_time(method, p_ext, sig_a, z_a, width, tk, T, rtol, atol_v, stats):
             return sig_a + d, z_a, 0.0, it, res.status
         z = res.y[-1]
         sig = sig_a + d
-        g = z[0] * T - tk
+        g = physical_tau(sig, z, mode) * T - tk
         if abs(g) <= tol:
             return sig, z, -g, it, 0
         if g < 0:
