@@ -404,6 +404,10 @@ def stiefel_cases():
         # abm: constant-step Adams-Bashforth-Moulton, DROMO sigma form only (docs/integrators.md s8)
         Case("Stiefel dromo", base.replace(**{"integrator.formulation": "dromo"}), truth,
              {**native, "abm": TOLERANCES}),
+        # the linear time element (docs/dromo.md section 11): pays on Example 1, not on this case;
+        # on the axes so that a user sees both
+        Case("Stiefel dromo+te", base.replace(**{"integrator.formulation": "dromo", "integrator.time_element": "linear"}),
+             truth, {"vern9": TOLERANCES, "abm": TOLERANCES}),
     ]
 
 

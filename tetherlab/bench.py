@@ -143,8 +143,9 @@ def _print_table(title, rows):
 EXTRA_SECTIONS = (
     ("stiefel", "Stiefel-Scheifele, Examples 2 (ex2: J2 + Moon) and 1 (ex1: J2 only): tetherlab's best method "
                 "against heyoka at 1 m and 1 mm final error (issues 3, 12); cost exponent x: wall ~ error^-x"),
-    ("stiefel_costs", "Stiefel-Scheifele cost breakdown, DROMO sigma Vern9 against heyoka (issue 12): rhs latency, "
-                      "Vern9 step overhead, glue, heyoka per step and per Taylor order; last rows: fitted trends"),
+    ("stiefel_costs", "Stiefel-Scheifele cost breakdown of tetherlab's pick (ex2: DROMO sigma Vern9; ex1: DROMO "
+                      "sigma with the linear time element, ABM) against heyoka (issue 12): rhs latency, the "
+                      "method's step overhead, glue, heyoka per step and per Taylor order; last rows: fitted trends"),
     ("deorbit", "Electrodynamic de-orbit, n = 1, whole mission, every integrator (issue 3)"),
     ("deorbit_rods", "Electrodynamic de-orbit against the rod count: RADAU5, formulation cowell-orbit, "
                      "quasi-static start, rtol 1e-8 (issue 11; targets n = 16 <= 60 s, n = 64 <= 5 min)"),

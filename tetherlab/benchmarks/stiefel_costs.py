@@ -1,5 +1,6 @@
-"""Where the Stiefel-Scheifele time goes: tetherlab's DROMO sigma form with Vern9 against heyoka,
-per right-hand-side call, per step and per Taylor order (issue 12; docs/integrators.md section 8).
+"""Where the Stiefel-Scheifele time goes: tetherlab's pick (:data:`PICKS`: DROMO sigma form with
+Vern9 on Example 2, with the linear time element and ABM on Example 1) against heyoka, per
+right-hand-side call, per step and per Taylor order (issue 12; docs/integrators.md section 8).
 
 For each case (Example 2, J2 + Moon; Example 1, J2 only) and target final error (1 m, 1 mm), the
 loosest tolerance of the bench grid (:data:`.stiefel.TOLS`, :data:`.stiefel.HEYOKA_TOLS`) that
@@ -12,8 +13,9 @@ Beside the wall times:
   the scene's effects, measured as a *dependent chain* (each call's input is built from the
   previous call's output, as the stages of a Runge-Kutta step are): its latency, which is what a
   step pays 16 times in sequence;
-* ``step_overhead_ns``: Vern9's own work per step (stage sums, solution, error norm, controller,
-  bookkeeping) measured with a trivial 8-component rhs (dy = -y) and that rhs's calls subtracted;
+* ``step_overhead_ns``: the method's own work per step (Vern9: stage sums, solution, error norm,
+  controller, bookkeeping; ABM: the two history sums, error norm, ring update) measured with a
+  trivial 8-component rhs (dy = -y) and that rhs's calls subtracted;
 * ``glue_ms``: the driver call minus the compiled loop (set-up, conversions, the dispatch);
 * ``floor_ratio``: n_rhs x rhs_ns / heyoka's wall: the ratio tetherlab would have if step
   overhead and glue were zero and the rhs kept its latency -- how far constant factors outside
@@ -71,9 +73,9 @@ def _vern9_trivial(rhs, t_end, rtol):
     return stats
 
 
-def _rhs_probe(case: str, n_calls: int = 20_000):
+def _rhs_probe(case: str, n_calls: int = 20_000, time_element: str = "none"):
     """A zero-argument function making n_calls chained DROMO sigma rhs calls with the case's
-    effects, and n_calls."""
+    effects (and the sigma form's time variable), and n_calls."""
     from ..formulations import dromo
     from ..kernel.layout import FORM_DROMO_SIGMA
     from ..pipeline import prepare
@@ -83,22 +85,45 @@ def _rhs_probe(case: str, n_calls: int = 20_000):
                                                              "output.count": 2}))  # fmt: skip
     h = prep.y0.size // 2
     L = float(np.linalg.norm(prep.y0[:3]))
-    p = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, prep.mu_m3_s2, L, prep.y0.size)
-    z0 = np.concatenate([[0.0], dromo.cartesian_to_dromo(prep.y0[:3], prep.y0[h : h + 3], prep.mu_m3_s2, L)])
+    te = dromo.TIME_ELEMENTS[time_element]
+    p = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, prep.mu_m3_s2, L, prep.y0.size, te)
+    z0 = dromo.sigma_state(prep.y0[:3], prep.y0[h : h + 3], prep.mu_m3_s2, L, 0.0, 0.0, te)
     dsig = 100.0 * np.pi / n_calls  # sigma over 50 revolutions: the run's trigonometric arguments
     _rhs_chain(dromo.dromo_sigma_rhs, z0, p, 10, dsig)
     return (lambda: _rhs_chain(dromo.dromo_sigma_rhs, z0, p, n_calls, dsig)), n_calls
 
 
-def _overhead_probes():
-    """(Vern9 run of the trivial rhs, its rhs calls, its steps; chained trivial rhs calls, count)."""
-    stats = _vern9_trivial(_trivial_rhs, 1000.0, 1e-12)
+def _abm_trivial(rhs, n_steps):
+    """A constant-step ABM (k = 12) run of the trivial rhs over n_steps steps; returns the
+    statistics array."""
+    import math
+
+    from ..integrators import abm
+
+    ws = abm.workspace(8)
+    stats = np.zeros(8, dtype=np.int64)
+    h = 1e-3
+    abm.abm_core(rhs, 0.0, np.ones(8), h, abm.DEFAULT_ORDER, ws["F"], ws["S"], -1, np.zeros(4), 1e-12,
+                 np.full(8, 1e-12), (n_steps + abm.DEFAULT_ORDER) * h, -1, 0.0, 2 * math.pi, 10**9, False,
+                 stats, ws["K"], ws["w"], ws["fix"], rhs, False)  # fmt: skip
+    return stats
+
+
+def _overhead_probes(method: str = "vern9"):
+    """(the method's run with the trivial rhs, its rhs calls, its steps; chained trivial rhs calls,
+    count): Vern9 to t = 1000 at 1e-12, or 5 000 constant ABM steps."""
+    if method == "abm":
+        def run():
+            return _abm_trivial(_trivial_rhs, 5000)
+    else:
+        def run():
+            return _vern9_trivial(_trivial_rhs, 1000.0, 1e-12)
+    stats = run()
     z0 = np.ones(8)
     p = np.zeros(4)
     _rhs_chain(_trivial_rhs, z0, p, 10, 1e-6)
     n = int(stats[ST_NRHS])
-    return ((lambda: _vern9_trivial(_trivial_rhs, 1000.0, 1e-12)), n, int(stats[ST_ACCEPTED] + stats[ST_REJECTED]),
-            (lambda: _rhs_chain(_trivial_rhs, z0, p, n, 1e-6)))  # fmt: skip
+    return (run, n, int(stats[ST_ACCEPTED] + stats[ST_REJECTED]), (lambda: _rhs_chain(_trivial_rhs, z0, p, n, 1e-6)))
 
 
 def _fit(x, err):
@@ -109,17 +134,23 @@ def _fit(x, err):
     return float(np.polyfit(np.log(1.0 / err[m]), np.log(x[m]), 1)[0])
 
 
-def run(case: str = "ex2", repeats: int = 21) -> list[dict]:
+#: the method profiled per case: the bench's pick (``--only stiefel``; docs/dromo.md section 11)
+PICKS = {"ex2": ("dromo", "vern9"), "ex1": ("dromo+te", "abm")}
+
+
+def run(case: str = "ex2", repeats: int = 21, formulation: str | None = None, method: str | None = None) -> list[dict]:
+    formulation = formulation or PICKS[case][0]
+    method = method or PICKS[case][1]
     ref = S.reference_position_m(case)
     tl = []
     for tol in S.TOLS:
-        f = S.runner("dromo", "vern9", tol, case)
+        f = S.runner(formulation, method, tol, case)
         r, st = f()
         tl.append({"tol": tol, "run": f, "error_m": float(np.linalg.norm(r - ref)), "n_rhs": st["n_rhs"],
                    "steps": st["n_accepted"] + st["n_rejected"]})  # fmt: skip
     hk = S.heyoka_rows(case=case)
-    rhs_probe, n_probe = _rhs_probe(case)
-    v9_probe, v9_rhs, v9_steps, triv_probe = _overhead_probes()
+    rhs_probe, n_probe = _rhs_probe(case, time_element="linear" if formulation == "dromo+te" else "none")
+    v9_probe, v9_rhs, v9_steps, triv_probe = _overhead_probes(method)
     rows = []
     for target in S.TARGETS_M:
         a = S._loosest(tl, target)
@@ -142,7 +173,7 @@ def run(case: str = "ex2", repeats: int = 21) -> list[dict]:
         rhs_ns = w_rhs / n_probe * 1e9
         ovh_ns = (w_v9 - w_triv) / v9_steps * 1e9
         rows.append({
-            "case": case, "target_m": target, "tl_tol": a["tol"], "tl_error_m": a["error_m"],
+            "case": case, "target_m": target, "tl_method": f"{formulation} {method}", "tl_tol": a["tol"], "tl_error_m": a["error_m"],
             "tl_n_rhs": a["n_rhs"], "tl_steps": a["steps"], "rhs_ns": rhs_ns, "step_overhead_ns": ovh_ns,
             "tl_wall_ms": w_tl * 1e3, "tl_kernel_ms": k_min * 1e3, "glue_ms": (w_tl - k_min) * 1e3,
             "rhs_share": a["n_rhs"] * rhs_ns * 1e-9 / k_min,
