@@ -150,6 +150,17 @@ def gauss_legendre_halves(nq: int) -> tuple[np.ndarray, np.ndarray]:
     return nodes, weights
 
 
+def _hot_slots() -> dict:
+    """Effect code -> header slot of its parameter offset, for the point-mass effects that
+    kernel/effects.py::_body_force evaluates without walking the effect table."""
+    from .forces import central_gravity, stiefel_moon, zonal
+
+    return {central_gravity.CODE: L.H_PAR_CG, zonal.CODE_J2: L.H_PAR_J2, stiefel_moon.CODE: L.H_PAR_SMOON}
+
+
+_HOT_SLOTS = _hot_slots()
+
+
 def build_model(
     *,
     root_mass_kg: float,
@@ -218,10 +229,11 @@ def build_model(
         "roots": len(roots),
         "wt": len(wheels) * L.WT_SIZE + sum(2 * len(w.times_s) for _, w in wheels),
         "bscr": nbody * L.BS_SIZE + nteth * L.TS_SIZE + len(wheels) * L.WS_SIZE + 72,
+        "rest": 2 * sum(1 for spec, _ in effects if spec.code not in _HOT_SLOTS),
     }
     offs = {}
     pos = L.H_SIZE
-    for key in ("eff", "teth", "rod", "quad", "cnt", "scr", "body", "order", "roots", "wt", "bscr"):
+    for key in ("eff", "teth", "rod", "quad", "cnt", "scr", "body", "order", "roots", "wt", "bscr", "rest"):
         offs[key] = pos
         pos += sizes[key]
     p = np.zeros(pos)
@@ -259,15 +271,26 @@ def build_model(
     p[L.H_MU_GG] = central["mu_m3_s2"] if any(spec.name == "central_gravity" for spec, _ in effects) else 0.0
     p[offs["roots"] : offs["roots"] + len(roots)] = roots
 
-    # effect table, parameters after the table
+    # effect table, parameters after the table; the body-force slots (layout H_PAR_CG ...)
     par = offs["eff"] + len(effects) * L.ET_SIZE
+    for slot in _HOT_SLOTS.values():
+        p[slot] = -1
+    n_rest = 0
     for e, ((spec, _), vals) in enumerate(zip(effects, eff_params)):
         base = offs["eff"] + e * L.ET_SIZE
         p[base + L.ET_CODE] = spec.code
         p[base + L.ET_OFF_PAR] = par
         p[base + L.ET_NPAR] = len(vals)
         p[par : par + len(vals)] = vals
+        if spec.code in _HOT_SLOTS:
+            p[_HOT_SLOTS[spec.code]] = par
+        else:
+            p[offs["rest"] + 2 * n_rest] = spec.code
+            p[offs["rest"] + 2 * n_rest + 1] = par
+            n_rest += 1
         par += len(vals)
+    p[L.H_NREST] = n_rest
+    p[L.H_OFF_REST] = offs["rest"]
 
     rod_slices = []
     g = 0

@@ -27,7 +27,21 @@ from ..forces import stiefel_moon  # Stiefel-Scheifele analytic Moon, code 30
 from ..forces import third_body, zonal  # gravity family, codes 10-13
 from ..forces import drag, electrodynamic  # codes 20-29
 from ..forces import oml  # code 22: OML bare-tether current (issue 13)
-from .layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_FAIL_EFFECT, H_FAIL_EFFECT_T, H_NEFF, H_OFF_CNT, H_OFF_EFF
+from .layout import (
+    ET_CODE,
+    ET_OFF_PAR,
+    ET_SIZE,
+    H_FAIL_EFFECT,
+    H_FAIL_EFFECT_T,
+    H_NEFF,
+    H_NREST,
+    H_OFF_CNT,
+    H_OFF_EFF,
+    H_OFF_REST,
+    H_PAR_CG,
+    H_PAR_J2,
+    H_PAR_SMOON,
+)
 
 
 @njit(cache=True)
@@ -56,40 +70,53 @@ def perturbing_body_force(p, t, body, x, y, z, vx, vy, vz, mass):
 
 @njit(cache=True)
 def _body_force(p, t, body, x, y, z, vx, vy, vz, mass, central):
-    neff = int(p[H_NEFF])
-    off = int(p[H_OFF_EFF])
+    """The scene's effects on point mass ``body`` (central gravity only with ``central``).
+
+    Central gravity, J2 and the Stiefel Moon are reached through their header slots (layout
+    H_PAR_CG, H_PAR_J2, H_PAR_SMOON: their parameter offsets, -1 when the scene does not name
+    them), every other effect through the (code, offset) list H_OFF_REST.  Walking the whole
+    effect table instead (a code and an offset read and converted per entry, a compare chain)
+    cost ~9 % of a whole DROMO Stiefel-Scheifele run (docs/integrators.md section 8).  An effect
+    the scene does not name is still never evaluated."""
     cnt = int(p[H_OFF_CNT])
     fx = 0.0
     fy = 0.0
     fz = 0.0
-    for e in range(neff):
-        code = int(p[off + e * ET_SIZE + ET_CODE])
-        par = int(p[off + e * ET_SIZE + ET_OFF_PAR])
-        if code == central_gravity.CODE:
-            if not central:
-                continue
-            p[cnt + code] += 1.0
-            ax, ay, az = central_gravity.accel(p[par], x, y, z)
-        elif code == zonal.CODE_J2:
-            # J2 and the Stiefel Moon are dispatched here, not in _other_body: on the DROMO
-            # point-mass path that call cost ~12 ns each, as much as the two forces themselves
-            p[cnt + code] += 1.0
-            ax, ay, az = zonal.accel_j2(p[par], p[par + 1], p[par + 2], x, y, z)
-        elif code == stiefel_moon.CODE:
-            p[cnt + code] += 1.0
-            ax, ay, az = stiefel_moon.accel(p[par], p[par + 1], p[par + 2], t, x, y, z, p[par + 3])
-        else:
-            p[cnt + code] += 1.0
-            ax, ay, az = _other_body(p, code, par, t, body, x, y, z, vx, vy, vz, mass)
-            _note_nonfinite(p, code, t, ax, ay, az)
-            fx += ax
-            fy += ay
-            fz += az
-            continue
-        _note_nonfinite(p, code, t, ax, ay, az)
+    if central:
+        pc = int(p[H_PAR_CG])
+        if pc >= 0:
+            p[cnt + central_gravity.CODE] += 1.0
+            ax, ay, az = central_gravity.accel(p[pc], x, y, z)
+            _note_nonfinite(p, central_gravity.CODE, t, ax, ay, az)
+            fx += mass * ax
+            fy += mass * ay
+            fz += mass * az
+    pj = int(p[H_PAR_J2])
+    if pj >= 0:
+        p[cnt + zonal.CODE_J2] += 1.0
+        ax, ay, az = zonal.accel_j2(p[pj], p[pj + 1], p[pj + 2], x, y, z)
+        _note_nonfinite(p, zonal.CODE_J2, t, ax, ay, az)
         fx += mass * ax
         fy += mass * ay
         fz += mass * az
+    pm = int(p[H_PAR_SMOON])
+    if pm >= 0:
+        p[cnt + stiefel_moon.CODE] += 1.0
+        ax, ay, az = stiefel_moon.accel(p[pm], p[pm + 1], p[pm + 2], t, x, y, z, p[pm + 3])
+        _note_nonfinite(p, stiefel_moon.CODE, t, ax, ay, az)
+        fx += mass * ax
+        fy += mass * ay
+        fz += mass * az
+    off = int(p[H_OFF_REST])
+    for e in range(int(p[H_NREST])):
+        code = int(p[off + 2 * e])
+        par = int(p[off + 2 * e + 1])
+        p[cnt + code] += 1.0
+        ax, ay, az = _other_body(p, code, par, t, body, x, y, z, vx, vy, vz, mass)
+        _note_nonfinite(p, code, t, ax, ay, az)
+        fx += ax
+        fy += ay
+        fz += az
     return fx, fy, fz
 
 

@@ -56,7 +56,15 @@ H_NROOT = 34       # number of root bodies
 H_OFF_ROOTS = 35   # offset of the root list (NROOT body indices)
 H_FAIL_EFFECT = 36    # code of the last effect whose force came out non-finite (0 = none): kernel/effects.py
 H_FAIL_EFFECT_T = 37  # time of that evaluation
-H_SIZE = 40
+# -- body forces without the table walk (kernel/effects.py::_body_force; docs/integrators.md 8):
+# the parameter offsets of the point-mass effects every orbit scene names, -1 when not named, and
+# the (code, parameter offset) pairs of every other effect, for the loop over the rest
+H_PAR_CG = 38      # parameter offset of central_gravity (-1: not named)
+H_PAR_J2 = 39      # parameter offset of j2 (-1: not named)
+H_PAR_SMOON = 40   # parameter offset of stiefel_moon (-1: not named)
+H_NREST = 41       # number of the other effects
+H_OFF_REST = 42    # offset of their (code, parameter offset) pairs
+H_SIZE = 48
 
 # -- deliberate defects: one registry of codes (tetherlab/mutants.py; like MODEL_PRINTED) -----------
 MUT_NONE = 0
