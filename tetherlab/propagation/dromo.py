@@ -356,7 +356,10 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
             break
     wall = time.perf_counter() - t0
     rows = []
-    tau_out = np.array([physical_tau(float(out_sig[j]), out_z[j], mode) for j in range(k)])
+    if mode == TIME_LINEAR:
+        tau_out = np.array([physical_tau(float(out_sig[j]), out_z[j], mode) for j in range(k)])
+    else:  # tau itself (no compiled call per output from Python: ~5 us each)
+        tau_out = out_z[:k, 0].copy()
     for j in range(k):
         r, v = dromo_to_cartesian(float(out_sig[j]), out_z[j, 1:8], mu, length_m)
         g = float(tt[j] - tau_out[j] * T)
