@@ -28,6 +28,11 @@ TOLS = tuple(10.0**-k for k in range(4, 14))
 #: 12 for DOP853 and 16 for Vern9: compare its n_rhs, not its steps; docs/integrators.md section 8)
 CASES = (("cowell", "dop853"), ("cowell", "vern9"), ("cowell", "radau5"), ("dromo", "dop853"),
          ("dromo", "vern9"), ("dromo", "radau5"), ("dromo", "abm"))
+#: Example 1 (J2 only, its own reference; issue 12): the sigma form with tau and with the linear time
+#: element ("dromo+te", docs/dromo.md section 11), rows "ex1 tetherlab ..."; the gate
+#: stiefel_example1_te_error reads the dromo+te abm row at 1e-11 (tetherlab/verify.py)
+EX1_CASES = (("dromo", "vern9"), ("dromo+te", "vern9"), ("dromo+te", "abm"))
+EX1_TOLS = tuple(10.0**-k for k in range(8, 14))
 
 
 def rows() -> list[dict]:
@@ -48,6 +53,21 @@ def rows() -> list[dict]:
             })  # fmt: skip
             print(f"{form:7s} {method:7s} {tol:.0e} err {err:.3e} m  steps/orbit {out[-1]['mean_steps_per_orbit']:.1f}",
                   flush=True)  # fmt: skip
+    ref1 = reference_position_m("ex1")
+    for form, method in EX1_CASES:
+        for tol in EX1_TOLS:
+            try:
+                r, st = runner(form, method, tol, "ex1")()
+                err = float(np.linalg.norm(r - ref1))
+            except Exception as exc:
+                r, st, err = None, {}, float("nan")
+                print(f"ex1 {form} {method} {tol:.0e}: failed: {exc}", file=sys.stderr)
+            out.append({
+                "who": f"ex1 tetherlab {form} {method}", "tol": tol, "final_position_error_m": err,
+                "mean_steps_per_orbit": st.get("n_accepted", 0) / N_ORBITS,
+                "search_steps": st.get("search_n_accepted", 0), "n_rhs": st.get("n_rhs", 0),
+            })  # fmt: skip
+            print(f"ex1 {form:8s} {method:7s} {tol:.0e} err {err:.3e} m  rhs {out[-1]['n_rhs']}", flush=True)
     ref_json = json.loads(REFERENCE.read_text())
     for h in ref_json["heyoka_double"]["rows"]:
         out.append({"who": "heyoka double (stored)", "tol": h["tol"],
@@ -81,7 +101,9 @@ def write(outdir: Path, table: list[dict]) -> None:
               "search_steps of the CSV): with DOP853 one landing step per output (an event on tau in the "
               "compiled loop), with RADAU5 a Newton search of a few dozen steps.  DROMO abm: constant-step "
               "Adams-Bashforth-Moulton, 2 rhs calls a step (12 for DOP853, 16 for Vern9): compare n_rhs in "
-              "the CSV; docs/integrators.md section 8.", "", footer(), ""]  # fmt: skip
+              "the CSV; docs/integrators.md section 8.  Columns \"ex1 ...\": Stiefel & Scheifele's Example 1 (J2 only, "
+              "286.8 d) against references/stiefel/example1.json, tolerances 1e-8 ... 1e-13 only; dromo+te: the "
+              "linear time element (docs/dromo.md section 11).", "", footer(), ""]  # fmt: skip
     (outdir / "stiefel_table.md").write_text("\n".join(lines))
 
     import matplotlib

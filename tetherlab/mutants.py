@@ -209,7 +209,7 @@ MUTANTS = {
             "J2 with the wrong sign (J2 = +sqrt5 C20bar), in acceleration and potential alike",
             "the j2 / zonal effect's packed coefficient (forces/zonal.py)",
             "EGM2008 (Pavlis et al. 2012): J_n = -sqrt(2n+1) C_n0bar; references/heyoka_orbits",
-            ("heyoka_orbits_position", "stiefel_cowell_best_error"),
+            ("heyoka_orbits_position", "stiefel_cowell_best_error", "stiefel_example1_te_error"),
             mutate=_j2_sign,
             path="gravity",
         ),
@@ -221,6 +221,16 @@ MUTANTS = {
             ("stiefel_cowell_best_error",),
             mutate=_moon_indirect,
             path="moon",
+        ),
+        Mutant(
+            "time_element_secular_dropped",
+            "the linear time element's rate without Phi d(1/n)/dsigma, the mean motion's drift "
+            "(dtau_l/dsigma = 1/n + grad(Phi/n).q' with Phi's own gradient only)",
+            "formulations/dromo.py _linear_element_rate (p[H_MUTANT] = MUT_TE_SECULAR)",
+            "docs/dromo.md section 11 (the rate derived from tau_l = tau + Phi/n); shared/references/dromo.md s6(b)",
+            ("stiefel_example1_te_error",),
+            mutate=_flag(L.MUT_TE_SECULAR),
+            path="dromo",
         ),
         Mutant(
             "de421_low_degree",

@@ -358,7 +358,27 @@ def check_stiefel_probe(rows_out):
             rows_out.append({"case": f"{form}: failed: {exc}"})
         rows_out.append({"case": f"Stiefel-Scheifele, {form}, dop853 1e-13", "final position error (m)": err})
         out[f"stiefel_{form}_best_error"] = err
+    out["stiefel_example1_te_error"] = _example1_te_error(rows_out)
     return out
+
+
+#: the gate stiefel_example1_te_error's run (docs/dromo.md section 11): Example 1 (J2 only) in the
+#: DROMO sigma form with the linear time element, ABM, tolerance 1e-11 (measured 3.5 cm)
+EXAMPLE1_TE_RUN = ("dromo+te", "abm", 1e-11)
+
+
+def _example1_te_error(rows_out) -> float:
+    from .benchmarks.stiefel import reference_position_m, runner
+
+    form, method, tol = EXAMPLE1_TE_RUN
+    try:
+        r, _ = runner(form, method, tol, "ex1")()
+        err = float(np.linalg.norm(r - reference_position_m("ex1")))
+    except Exception as exc:  # a failed run fails the gate
+        err = math.inf
+        rows_out.append({"case": f"Example 1 {form} {method}: failed: {exc}"})
+    rows_out.append({"case": f"Stiefel-Scheifele Example 1, {form} {method} {tol:g}", "final position error (m)": err})
+    return err
 
 
 DE421_EPOCH = "2026-01-01T00:00:00"
@@ -527,9 +547,13 @@ def _stiefel_gates(outdir: Path) -> dict:
 
     df = pd.read_csv(outdir / "stiefel_table.csv")
     best = {who: float(g["final_position_error_m"].min()) for who, g in df.groupby("who")}
+    form, method, tol = EXAMPLE1_TE_RUN
+    ex1 = df[(df["who"] == f"ex1 tetherlab {form} {method}") & (np.isclose(df["tol"], tol, rtol=1e-9))]
     return {
         "stiefel_cowell_best_error": min(v for k, v in best.items() if k.startswith("tetherlab cowell")),
         "stiefel_dromo_best_error": min(v for k, v in best.items() if k.startswith("tetherlab dromo")),
+        # a missing row (the study did not run it) fails the gate
+        "stiefel_example1_te_error": float(ex1["final_position_error_m"].iloc[0]) if len(ex1) else math.inf,
     }
 
 
@@ -677,7 +701,7 @@ PROBES = [
     ("lateral", lambda rows: check_lateral_mode(rows, kinds=("paper", "energy")), {"tether", "integrator"}),
     ("catenary", lambda rows: check_catenary_probe(rows), {"tether", "statics"}),
     ("heyoka_orbits", lambda rows: check_heyoka_orbits(rows), {"gravity", "integrator"}),
-    ("stiefel", lambda rows: check_stiefel_probe(rows), {"gravity", "moon", "integrator"}),
+    ("stiefel", lambda rows: check_stiefel_probe(rows), {"gravity", "moon", "integrator", "dromo"}),
     ("de421", lambda rows: check_de421(rows), {"de421"}),
     ("dop853", lambda rows: check_dop853(rows), {"integrator"}),
 ]
@@ -801,7 +825,7 @@ _PROBE_GATES = {
     "lateral": ["lateral_mode_two_rods"],
     "catenary": ["catenary_shape_n64", "catenary_tension_n64", "catenary_order_deviation"],
     "heyoka_orbits": ["heyoka_orbits_position"],
-    "stiefel": ["stiefel_cowell_best_error", "stiefel_dromo_best_error"],
+    "stiefel": ["stiefel_cowell_best_error", "stiefel_dromo_best_error", "stiefel_example1_te_error"],
     "de421": ["de421_fit_error"],
     "dop853": ["dop853_work_exponent"],
 }

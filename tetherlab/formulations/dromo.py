@@ -36,10 +36,12 @@ from ..kernel.effects import perturbing_body_force
 from ..kernel.layout import (
     FORM_DROMO_SIGMA,
     FORM_DROMO_TIME,
+    H_DEFECT,
     H_FORM,
     H_LEN,
     H_OFF_FORM,
     H_ROOT_M,
+    MUT_TE_SECULAR,
 )
 from ..kernel.events import event_values
 from ..tether.chain import accelerations
@@ -125,11 +127,12 @@ def physical_tau(sigma, y, mode):
 
 
 @njit(cache=True, inline="always")
-def _linear_element_rate(c, sn, y, dy, pn, n, w, s, kap):
+def _linear_element_rate(c, sn, y, dy, pn, n, w, s, kap, secular):
     """d tau_l / d sigma = 1/n + grad_q(Phi/n) . q' (sheet s6(b)), from the element rates already
     in dy[1:4], and :func:`kepler_phase`'s Phi/n, n, w, s, kappa.  The Kepler part of dtau/dsigma
     = 1/(q3^3 s^2), sharply peaked at apocentre (1/s^2), cancels analytically into 1/n; what is
-    left is proportional to the perturbation."""
+    left is proportional to the perturbation.  ``secular`` multiplies the terms Phi d(1/n)/dsigma
+    (the mean motion's drift): 1 in every run, 0 only as tetherlab.mutants' deliberate defect."""
     q1 = y[1]
     q2 = y[2]
     q3 = y[3]
@@ -141,10 +144,10 @@ def _linear_element_rate(c, sn, y, dy, pn, n, w, s, kap):
     ks = w * kap / (s * s)
     f1 = 2.0 * (sw * sn - kap * (c + w1)) / den + (w1 * kap + w * sn) / s - ks * c
     f2 = 2.0 * (-sw * c - kap * (sn + w2)) / den + (w2 * kap - w * c) / s - ks * sn
-    iw2 = 3.0 * pn / (w * w)
+    iw2 = 3.0 * pn / (w * w) * secular
     g1 = f1 / n + iw2 * q1
     g2 = f2 / n + iw2 * q2
-    g3 = -3.0 * pn / q3
+    g3 = -3.0 * pn / q3 * secular
     dy[0] = 1.0 / n + g1 * dy[1] + g2 * dy[2] + g3 * dy[3]
 
 
@@ -246,7 +249,8 @@ def dromo_sigma_rhs(sigma, y_ptr, dy_ptr, p_ptr):
     _scaled_rates(c, sn, y, (fx * ix + fy * iy + fz * iz) * k, (fx * jx + fy * jy + fz * jz) * k,
                   (fx * kx + fy * ky + fz * kz) * k, dy)  # fmt: skip
     if linear:
-        _linear_element_rate(c, sn, y, dy, pn, n, w, s_, kap)
+        secular = 0.0 if p[H_DEFECT] == MUT_TE_SECULAR else 1.0
+        _linear_element_rate(c, sn, y, dy, pn, n, w, s_, kap, secular)
     return 0
 
 

@@ -74,6 +74,7 @@ MUT_DAMPING_SIGN = 3     # T = EA eps - D eps' (chain.py)
 MUT_MOON_INDIRECT = 4    # the Stiefel Moon without its indirect term (kernel/effects.py)
 MUT_NO_ELASTIC_E = 5     # the elastic energy left out of the energy diagnostic (diagnostics.py)
 MUT_HOLD_1PC = 6         # the static solver's holding force 1 % off (statics.py)
+MUT_TE_SECULAR = 7       # the linear time element's rate without Phi d(1/n)/dsigma (formulations/dromo.py)
 DEFECT_NONE = MUT_NONE
 DEFECT_UNROTATED_ATTACHMENT = 21  # the attachment vector used in body axes as if inertial (chain.py)
 DEFECT_NO_CENTRIPETAL = 22        # omega x (omega x rho) dropped from the attachment acceleration
