@@ -35,39 +35,29 @@ EX1_CASES = (("dromo", "vern9"), ("dromo+te", "vern9"), ("dromo+te", "abm"))
 EX1_TOLS = tuple(10.0**-k for k in range(8, 14))
 
 
+def _row(case: str, form: str, method: str, tol: float, ref) -> dict:
+    """One run's table row ("who" prefixed with "ex1 " for Example 1)."""
+    try:
+        r, st = runner(form, method, tol, case)()
+        err = float(np.linalg.norm(r - ref))
+    except Exception as exc:  # a failed run is a table entry, not a crash of the study
+        st, err = {}, float("nan")
+        print(f"{case} {form} {method} {tol:.0e}: failed: {exc}", file=sys.stderr)
+    row = {
+        "who": ("ex1 " if case == "ex1" else "") + f"tetherlab {form} {method}", "tol": tol,
+        "final_position_error_m": err, "mean_steps_per_orbit": st.get("n_accepted", 0) / N_ORBITS,
+        "search_steps": st.get("search_n_accepted", 0), "n_rhs": st.get("n_rhs", 0),
+    }  # fmt: skip
+    print(f"{case} {form:8s} {method:7s} {tol:.0e} err {err:.3e} m  steps/orbit {row['mean_steps_per_orbit']:.1f}  "
+          f"rhs {row['n_rhs']}", flush=True)  # fmt: skip
+    return row
+
+
 def rows() -> list[dict]:
     ref = reference_position_m()
-    out = []
-    for form, method in CASES:
-        for tol in TOLS:
-            try:
-                r, st = runner(form, method, tol)()
-                err = float(np.linalg.norm(r - ref))
-            except Exception as exc:  # a failed run is a table entry, not a crash of the study
-                r, st, err = None, {}, float("nan")
-                print(f"{form} {method} {tol:.0e}: failed: {exc}", file=sys.stderr)
-            out.append({
-                "who": f"tetherlab {form} {method}", "tol": tol, "final_position_error_m": err,
-                "mean_steps_per_orbit": st.get("n_accepted", 0) / N_ORBITS,
-                "search_steps": st.get("search_n_accepted", 0), "n_rhs": st.get("n_rhs", 0),
-            })  # fmt: skip
-            print(f"{form:7s} {method:7s} {tol:.0e} err {err:.3e} m  steps/orbit {out[-1]['mean_steps_per_orbit']:.1f}",
-                  flush=True)  # fmt: skip
+    out = [_row("ex2", form, method, tol, ref) for form, method in CASES for tol in TOLS]
     ref1 = reference_position_m("ex1")
-    for form, method in EX1_CASES:
-        for tol in EX1_TOLS:
-            try:
-                r, st = runner(form, method, tol, "ex1")()
-                err = float(np.linalg.norm(r - ref1))
-            except Exception as exc:
-                r, st, err = None, {}, float("nan")
-                print(f"ex1 {form} {method} {tol:.0e}: failed: {exc}", file=sys.stderr)
-            out.append({
-                "who": f"ex1 tetherlab {form} {method}", "tol": tol, "final_position_error_m": err,
-                "mean_steps_per_orbit": st.get("n_accepted", 0) / N_ORBITS,
-                "search_steps": st.get("search_n_accepted", 0), "n_rhs": st.get("n_rhs", 0),
-            })  # fmt: skip
-            print(f"ex1 {form:8s} {method:7s} {tol:.0e} err {err:.3e} m  rhs {out[-1]['n_rhs']}", flush=True)
+    out += [_row("ex1", form, method, tol, ref1) for form, method in EX1_CASES for tol in EX1_TOLS]
     ref_json = json.loads(REFERENCE.read_text())
     for h in ref_json["heyoka_double"]["rows"]:
         out.append({"who": "heyoka double (stored)", "tol": h["tol"],

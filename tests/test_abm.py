@@ -30,16 +30,26 @@ def _oscillator(t, y_ptr, dy_ptr, p_ptr):
     return 0
 
 
+@rhs_cfunc
+def _level_event(t, y_ptr, g_ptr, p_ptr):
+    """g = y2 - p[0]: the level stop written as an event (the stop DROMO's time element needs)."""
+    g = carray(g_ptr, (1,))
+    g[0] = y_ptr[2] - p_ptr[0]
+    return 0
+
+
 def _run(k, h, t_stop, adapt=False, tol=1.0, comp=-1, level=0.0, y=None, F=None, head=-1, t=0.0,
-         stats=None):  # fmt: skip
+         stats=None, use_event=False):  # fmt: skip
+    """``use_event``: the same stop through the event g = y2 - level (abm_core's event mode)."""
     y = np.array([1.0, 0.0, 0.0]) if y is None else y
     ws = abm.workspace(3)
     F = ws["F"] if F is None else F
     stats = np.zeros(8, np.int64) if stats is None else stats
     fix = np.zeros(6)
-    st, t, h, head = abm.abm_core(_oscillator, t, y, h, k, F, ws["S"], head, np.zeros(4), tol,
+    p = np.array([level, 0.0, 0.0, 0.0])
+    st, t, h, head = abm.abm_core(_oscillator, t, y, h, k, F, ws["S"], head, p, tol,
                                   np.full(3, tol), t_stop, comp, level, 2 * math.pi, 10**7, adapt,
-                                  stats, ws["K"], ws["w"], fix, _oscillator, False)  # fmt: skip
+                                  stats, ws["K"], ws["w"], fix, _level_event, use_event)  # fmt: skip
     return st, t, h, head, y, F, stats, fix
 
 
@@ -126,26 +136,30 @@ def test_adaptive_restarts_fix_a_bad_first_step():
     assert 0.05 < h < 0.6  # 10-120 steps a period: a sane step for k=12 at 1e-10
 
 
-def test_level_stop_and_resume_are_bit_for_bit():
+@pytest.mark.parametrize("use_event", [False, True], ids=["level", "event"])
+def test_level_stop_and_resume_are_bit_for_bit(use_event):
     """Stop when y2 (= t) would reach 3.3 inside a step; resuming gives the same trajectory as
-    a run that never stopped."""
+    a run that never stopped.  With ``use_event`` fix[0] is g = y2 - 3.3 after the step."""
     k, h = 9, 0.1
-    st, t, _, head, y, F, stats, fix = _run(k, h, 6.0, comp=2, level=3.3)
+    st, t, _, head, y, F, stats, fix = _run(k, h, 6.0, comp=2, level=3.3, use_event=use_event)
     assert st == abm.LEVEL
-    assert t <= 3.3 <= t + h * (1 + 1e-12) and fix[0] >= 3.3 and fix[1] == 1.0
+    after = fix[0] + 3.3 if use_event else fix[0]
+    assert t <= 3.3 <= t + h * (1 + 1e-12) and after >= 3.3 and fix[1] == 1.0
     st2, t2, _, _, y2, *_ = _run(k, h, 6.0, y=y.copy(), F=F.copy(), head=head, t=t)
     st3, t3, _, _, y3, *_ = _run(k, h, 6.0)
     assert st2 == st3 == abm.OK and t2 == t3
     assert np.array_equal(y2, y3)
 
 
-def test_level_crossed_inside_the_starting_procedure():
+@pytest.mark.parametrize("use_event", [False, True], ids=["level", "event"])
+def test_level_crossed_inside_the_starting_procedure(use_event):
     """The starting procedure always runs to its end (outputs never change the path); a level it
     passed is reported with its bracket among the starting states S."""
     k, h = 9, 0.1
     ws = abm.workspace(3)
-    st, t, _, head, y, F, stats, fix = _run(k, h, 6.0, comp=2, level=0.35, F=ws["F"])
+    st, t, _, head, y, F, stats, fix = _run(k, h, 6.0, comp=2, level=0.35, F=ws["F"], use_event=use_event)
     assert st == abm.LEVEL_START and head == k - 1
     assert t == pytest.approx(0.8, abs=1e-15)  # the end of the k - 1 starting intervals
-    assert int(fix[5]) == 4 and fix[0] == pytest.approx(0.4, abs=1e-15)  # bracket y2 in [0.3, 0.4]
+    # bracket y2 in [0.3, 0.4]: fix[0] is y2 = 0.4 there (level) or g = 0.4 - 0.35 (event)
+    assert int(fix[5]) == 4 and fix[0] == pytest.approx(0.05 if use_event else 0.4, abs=1e-15)
     assert fix[4] == 0.0  # the starting procedure began at t = 0
