@@ -70,3 +70,25 @@ def test_idle_machine_estimate_hands_out_longest_first():
            "study:workprecision": {"cpu_s": 3.0}}
     assert verify.idle_machine_wall_s(res, 2) == 7.0
     assert verify.idle_machine_wall_s(res, 1) == 12.0
+
+
+def test_example1_gate_reads_its_own_row(tmp_path):
+    """stiefel_example1_te_error is the dromo+te abm row at 1e-11 of the Stiefel table, not a
+    neighbour (tolerances 1e-8 ... 1e-13 sit within numpy.isclose's default atol of each other),
+    and a table without that row fails the gate."""
+    import math
+
+    import pandas as pd
+
+    from tetherlab import verify
+
+    form, method, tol = verify.EXAMPLE1_TE_RUN
+    rows = [{"who": "tetherlab cowell dop853", "tol": 1e-13, "final_position_error_m": 0.04},
+            {"who": "tetherlab dromo dop853", "tol": 1e-13, "final_position_error_m": 0.003}]
+    # each tolerance its own error, so the row read is identified by its value
+    rows += [{"who": f"ex1 tetherlab {form} {method}", "tol": 10.0**-k, "final_position_error_m": float(k)}
+             for k in range(8, 14)]  # fmt: skip
+    pd.DataFrame(rows).to_csv(tmp_path / "stiefel_table.csv", index=False)
+    assert verify._stiefel_gates(tmp_path)["stiefel_example1_te_error"] == -math.log10(tol)
+    pd.DataFrame(rows[:2]).to_csv(tmp_path / "stiefel_table.csv", index=False)
+    assert verify._stiefel_gates(tmp_path)["stiefel_example1_te_error"] == math.inf

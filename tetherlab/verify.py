@@ -548,7 +548,7 @@ def _stiefel_gates(outdir: Path) -> dict:
     df = pd.read_csv(outdir / "stiefel_table.csv")
     best = {who: float(g["final_position_error_m"].min()) for who, g in df.groupby("who")}
     form, method, tol = EXAMPLE1_TE_RUN
-    ex1 = df[(df["who"] == f"ex1 tetherlab {form} {method}") & (np.isclose(df["tol"], tol, rtol=1e-9))]
+    ex1 = df[(df["who"] == f"ex1 tetherlab {form} {method}") & (np.isclose(df["tol"], tol, rtol=1e-9, atol=0.0))]
     return {
         "stiefel_cowell_best_error": min(v for k, v in best.items() if k.startswith("tetherlab cowell")),
         "stiefel_dromo_best_error": min(v for k, v in best.items() if k.startswith("tetherlab dromo")),
