@@ -199,6 +199,7 @@ def test_example1_with_the_element_reaches_its_reference(method):
         "integrator.method": method, "integrator.rtol": 1e-11, "integrator.atol": 1e-11,
         "integrator.formulation": "dromo", "integrator.time_element": "linear", "output.count": 2})  # fmt: skip
     res = simulate(scene, progress=False)
+    assert res.stats["formulation"] == "dromo-sigma" and res.stats["time_element"] == "linear"
     # measured 14 m (Vern9) and 3.5 cm (ABM) at 1e-11 (docs/dromo.md 11; 1 m needs Vern9 at 1e-12
     # or ABM at ~3e-11).  Budget: ten times the tau form's error at the same tolerance (10.7 m with
     # Vern9, docs/dromo.md 11): the element changes how the time is carried, not the accuracy the

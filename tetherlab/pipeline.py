@@ -745,6 +745,8 @@ def run_outcome(prep: Prepared, res, p: np.ndarray, total_wall_s: float) -> tupl
     stats = dict(res.stats)
     stats["total_wall_s"] = total_wall_s
     stats["formulation"] = prep.formulation
+    if prep.formulation == "dromo-sigma":
+        stats["time_element"] = prep.time_element  # what the sigma form carried as its time
     stats["events"] = [
         {"t_s": float(te), "event": prep.event_names[k], "side": "taut" if side > 0 else "slack"}
         if prep.event_names[k].startswith("slack.") else
