@@ -166,8 +166,9 @@ def _abm_clock_run(rhs, event, order, sig, z, h, F, S, head, targets, k, p, rtol
     """Sigma-form outputs k, k+1, ... with the constant-step ABM method (compiled loop).
 
     :func:`tetherlab.integrators.abm.abm_core` runs until the step in which the clock ``event``
-    g = tau - targets[k] (:func:`dromo_clock_event`, an argument so that this loop is cached: tau from the state, itself or through the
-    linear time element) would become >= 0 (status LEVEL: land from the step's start (sig, z)), or
+    g = tau - targets[k] (:func:`dromo_clock_event`, passed as an argument so that this loop is
+    cached; tau from the state, itself or through the linear time element) would become >= 0
+    (status LEVEL: land from the step's start (sig, z)), or
     reports that it was passed inside its last starting procedure (LEVEL_START: land from the
     starting state before it, kept in S).  A Vern9 step of length d lands on it, d by Newton on
     tau(sig + d) = targets[k] with dtau/dsigma = 1/(q3^3 s^2) (sheet s5).  The ABM run then
