@@ -163,3 +163,15 @@ def structured_vs_dense_lu(p, y, blk_p=None, seed=11, omega=None):
         xd = np.linalg.solve(E, b)
         out.append(np.max(np.abs(x - xd)) / np.max(np.abs(xd)))
     return out
+
+
+def call_cfunc(f, t: float, y, p, n_out: int | None = None) -> tuple[int, np.ndarray]:
+    """One call of a compiled cfunc with the integrators' RHS signature (rhs or event) from Python:
+    (its status, its output of ``n_out`` values, default len(y))."""
+    import ctypes
+
+    P = ctypes.POINTER(ctypes.c_double)
+    y = np.ascontiguousarray(y, dtype=float)
+    out = np.empty(y.size if n_out is None else n_out)
+    st = f.ctypes(t, y.ctypes.data_as(P), out.ctypes.data_as(P), np.ascontiguousarray(p).ctypes.data_as(P))
+    return st, out

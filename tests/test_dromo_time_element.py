@@ -14,13 +14,12 @@ docs/dromo.md section 11; shared/references/dromo.md s6(b)).
 
 from __future__ import annotations
 
-import ctypes
 import math
 
 import numpy as np
 import pytest
 
-from tests.helpers import SCENES
+from tests.helpers import SCENES, call_cfunc
 from tetherlab.errors import SceneError
 from tetherlab.formulations import dromo
 from tetherlab.kernel.layout import FORM_DROMO_SIGMA, H_OFF_FORM
@@ -44,11 +43,7 @@ def _blocks(prep, L):
 
 
 def _rhs(p, sigma, y):
-    dy = np.empty(8)
-    y = np.ascontiguousarray(y, float)
-    st = dromo.dromo_sigma_rhs.ctypes(sigma, y.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-                                      dy.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-                                      p.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))  # fmt: skip
+    st, dy = call_cfunc(dromo.dromo_sigma_rhs, sigma, y, p)
     assert st == 0
     return dy
 
@@ -125,7 +120,6 @@ def test_clock_event_has_the_sign_of_the_exact_value_and_equals_it_near_the_root
     prep, L, states = _states_along_the_orbit()
     _, p_te = _blocks(prep, L)
     off = int(p_te[H_OFF_FORM])
-    g = np.empty(1)
     rng = np.random.default_rng(12)
     n_exact = 0
     for sigma, el in states:
@@ -134,9 +128,7 @@ def test_clock_event_has_the_sign_of_the_exact_value_and_equals_it_near_the_root
         tau = taul - _phi_over_n(sigma, el[:3])
         for tk in np.concatenate([tau + rng.uniform(-300, 300, 40), tau + rng.uniform(-1e-3, 1e-3, 5)]):
             p_te[off + dromo.FP_CLOCK] = tk
-            drive.dromo_clock_event.ctypes(sigma, y.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-                                           g.ctypes.data_as(ctypes.POINTER(ctypes.c_double)),
-                                           p_te.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))  # fmt: skip
+            _, g = call_cfunc(drive.dromo_clock_event, sigma, y, p_te, 1)
             exact = tau - tk
             assert np.sign(g[0]) == np.sign(exact)
             if abs(exact) < 1e-2:  # near the root the shortcut is never taken (|g| < (pi+1-|Phi|)/n)

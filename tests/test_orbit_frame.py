@@ -12,7 +12,7 @@ from tetherlab.formulations import cowell_orbit as co
 from tetherlab.formulations.cowell import cowell_rhs_py
 from tetherlab.pipeline import integrate_prepared, prepare
 
-from .helpers import SCENES
+from .helpers import SCENES, call_cfunc
 
 DEORBIT = SCENES / "deorbit-ed.toml"
 R_EARTH_M = 6378.137e3  # the scene preset "earth" (tetherlab/scene.py)
@@ -55,11 +55,7 @@ def test_frame_rhs_is_the_inertial_rhs_in_turning_components():
     t = 2000.0
     y_in = prep.y0.copy()
     y_f = co.to_frame(t, y_in, omega, nqt)
-    import ctypes
-
-    P = ctypes.POINTER(ctypes.c_double)
-    dy = np.empty_like(y_f)
-    st = co.cowell_orbit_rhs.ctypes(t, y_f.ctypes.data_as(P), dy.ctypes.data_as(P), pe.ctypes.data_as(P))
+    st, dy = call_cfunc(co.cowell_orbit_rhs, t, y_f, pe)
     assert st == 0
     a_in = cowell_rhs_py(prep.model, y_in, t)[nqt:].reshape(-1, 3)
     q = y_f[:nqt].reshape(-1, 3)

@@ -318,7 +318,8 @@ def abm_core(rhs, t, y, h, k, F, S, head, p, rtol, atol, t_stop, comp, level, wi
                 return STEP_UNDERFLOW, t, h, head
             head = -1  # restart from (t, y): y is still y_n
             continue
-        # the stop test, written out (a call here, like the step's, slowed the loop)
+        # the stop test, written out: through _stop_value the loop took 577 against 528 ns a step
+        # (DROMO Example 1 with the time element's clock event, in-process alternating runs)
         if comp >= 0:
             if use_event:
                 event(t + h, ptr(yc), ptr(gbuf), ptr(p))

@@ -242,6 +242,15 @@ def _time_mode(p_ext) -> int:
     return int(p_ext[int(p_ext[H_OFF_FORM]) + FP_TIME])
 
 
+def _taus(sigmas, Z, mode) -> np.ndarray:
+    """Physical times tau of the sigma-form states Z (rows) at ``sigmas``: column 0 itself with
+    tau, one compiled :func:`physical_tau` call per row with the time element (a call from Python
+    costs ~5 us, so tau's rows, the default, make none)."""
+    if mode == TIME_LINEAR:
+        return np.array([physical_tau(float(a), b, mode) for a, b in zip(sigmas, Z)])
+    return np.array(Z[:, 0], dtype=float)
+
+
 _STAT_KEYS = ("n_accepted", "n_rejected", "n_rhs", "n_jac", "n_lu")
 
 
@@ -357,10 +366,7 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
             break
     wall = time.perf_counter() - t0
     rows = []
-    if mode == TIME_LINEAR:
-        tau_out = np.array([physical_tau(float(out_sig[j]), out_z[j], mode) for j in range(k)])
-    else:  # tau itself (no compiled call per output from Python: ~5 us each)
-        tau_out = out_z[:k, 0].copy()
+    tau_out = _taus(out_sig[:k], out_z[:k], mode)
     for j in range(k):
         r, v = dromo_to_cartesian(float(out_sig[j]), out_z[j, 1:8], mu, length_m)
         g = float(tt[j] - tau_out[j] * T)
@@ -429,7 +435,7 @@ def _integrate_sigma_grid(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, lengt
         sig_end = start_sig + TWO_PI
     S = np.concatenate(sig_grid)
     Z = np.concatenate(z_grid)
-    tg = np.array([physical_tau(float(a), b, mode) for a, b in zip(S, Z)]) * T
+    tg = _taus(S, Z, mode) * T
     if not np.all(np.diff(tg) > 0):
         status = status or 4
         message = message or "time did not increase along sigma (h -> 0 or s <= 0: DROMO singular)"
