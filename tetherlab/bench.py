@@ -142,23 +142,23 @@ def _print_table(title, rows):
 #: benchmark modules in tetherlab/benchmarks/ with a ``bench_rows()`` (name, table title)
 EXTRA_SECTIONS = (
     ("stiefel", "Stiefel-Scheifele, Examples 2 (ex2: J2 + Moon) and 1 (ex1: J2 only): tetherlab's best method "
-                "against heyoka at 1 m and 1 mm final error (issues 3, 12); cost exponent x: wall ~ error^-x"),
+                "against heyoka at 1 m and 1 mm final error (target ratios 0.5, 0.8); cost exponent x: wall ~ error^-x"),
     ("stiefel_costs", "Stiefel-Scheifele cost breakdown of tetherlab's pick (ex2: DROMO sigma Vern9; ex1: DROMO "
-                      "sigma with the linear time element, ABM) against heyoka (issue 12): rhs latency, the "
+                      "sigma with the linear time element, ABM) against heyoka: rhs latency, the "
                       "method's step overhead, glue, heyoka per step and per Taylor order; last rows: fitted trends"),
-    ("deorbit", "Electrodynamic de-orbit, n = 1, whole mission, every integrator (issue 3)"),
+    ("deorbit", "Electrodynamic de-orbit, n = 1, whole mission, every integrator (paper section 5: about 35 d)"),
     ("deorbit_rods", "Electrodynamic de-orbit against the rod count: RADAU5, formulation cowell-orbit, "
-                     "quasi-static start, rtol 1e-8 (issue 11; targets n = 16 <= 60 s, n = 64 <= 5 min)"),
+                     "quasi-static start, rtol 1e-8 (targets: n = 16 <= 60 s, n = 64 <= 5 min)"),
     ("cost_vs_n", "Cost per simulated orbit against the rod count, bench-libration rtol 1e-8, "
-                  "damped and undamped; last rows: fitted exponents (issue 11)"),
+                  "damped and undamped; last rows: fitted exponents (target: radau5 <= 1.2; docs/integrators.md 10)"),
     ("rigid_newton", "RADAU5 with a rigid body: dense against the bordered structured Newton matrix, per simulated "
-                     "second against the rod count; last rows: fitted exponents (issue 11, docs/integrators.md 13)"),
+                     "second against the rod count; last rows: fitted exponents (docs/integrators.md 13)"),
     ("forest_newton", "RADAU5 on a forest (two bench-libration-like systems, D = 2e4 N s): dense against the "
                       "structured Newton matrix, per simulated second against the rods per tether; last rows: "
-                      "fitted exponents (issue 11, docs/integrators.md 13)"),
-    ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity (issue 13)"),
-    ("igrf", "IGRF-14 field: cost of one evaluation against the degree (issue 13)"),
-    ("rigid", "Right-hand-side cost: rigid root + 3 wheels + 4 tethers against the point-mass hub (issue 10)"),
+                      "fitted exponents (docs/integrators.md 13)"),
+    ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity"),
+    ("igrf", "IGRF-14 field: cost of one evaluation against the degree (target: degree 13 in a few us)"),
+    ("rigid", "Right-hand-side cost: rigid root + 3 wheels + 4 tethers against the point-mass hub"),
 )
 
 
@@ -184,7 +184,7 @@ def main(argv=None) -> int:
     if want("effects"):
         from .benchmarks.effects import rhs_cost_rows
 
-        _print_table("Right-hand-side cost per call against the effects named (issue 3)", rhs_cost_rows())
+        _print_table("Right-hand-side cost per call against the effects named", rhs_cost_rows())
     for name, title in EXTRA_SECTIONS:
         if want(name):
             import importlib

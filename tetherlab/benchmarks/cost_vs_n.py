@@ -1,5 +1,5 @@
 """Cost per simulated orbit against the rod count, every native method, damped and undamped
-(issue 11).
+(target: radau5 exponent <= 1.2; docs/integrators.md section 10).
 
 The scene is studies/scenes/bench-libration.toml with ``rods = n`` and axial damping D = 0 or
 2e4 N s, rtol = atol = 1e-8.  Each run covers a fraction of an orbit (``orbit_fraction``, smaller

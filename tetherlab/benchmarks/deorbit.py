@@ -105,7 +105,7 @@ def bench_rows() -> list[dict]:
     return table()
 
 
-#: The many-rod mission (issue 11): RADAU5 in the frame turning with the orbit, from the
+#: The many-rod mission: RADAU5 in the frame turning with the orbit, from the
 #: quasi-static start (docs/integrators.md section 9).
 RODS_SETTINGS = {"integrator.method": "radau5", "integrator.formulation": "cowell-orbit",
                  "orbit.motion": "quasi-static", "integrator.rtol": 1e-8, "integrator.atol": 1e-8}  # fmt: skip
@@ -149,7 +149,7 @@ def main(argv=None) -> int:
     ap.add_argument("--rtol", type=float, default=None, help="one rtol for every method")
     ap.add_argument("--rods", type=int, default=1)
     ap.add_argument("--rod-counts", type=int, nargs="*", default=None,
-                    help="the many-rod table instead: cowell-orbit, quasi-static start, RADAU5 1e-8 (issue 11)")
+                    help="the many-rod table instead: cowell-orbit, quasi-static start, RADAU5 1e-8")
     args = ap.parse_args(argv)
     if args.rod_counts:
         rows = rods_table(tuple(args.rod_counts))

@@ -1,4 +1,4 @@
-"""``make bench`` section: the electrodynamic de-orbit against the rod count (issue 11).
+"""``make bench`` section: the electrodynamic de-orbit against the rod count.
 
 RADAU5 in the frame turning with the orbit from the quasi-static start
 (:data:`tetherlab.benchmarks.deorbit.RODS_SETTINGS`; docs/integrators.md section 9).  Command line:

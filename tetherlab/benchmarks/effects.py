@@ -1,4 +1,4 @@
-"""Right-hand-side cost per call against the number of effects a scene names (issue 3).
+"""Right-hand-side cost per call against the number of effects a scene names (unnamed: never evaluated).
 
 Rows for n = 1 and 16 rods and the effect sets: none; central gravity; + j2; + zonal (J2-J4,
 instead of j2); + the DE421 Moon; + the DE421 Sun.  The cost of an effect is the difference

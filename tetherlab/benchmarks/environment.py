@@ -1,4 +1,4 @@
-"""Right-hand-side cost of the environment effects of issue 13, per body and per rod.
+"""Right-hand-side cost of the environment effects (docs/environment.md), per body and per rod.
 
 Each row: central gravity + one effect at one fidelity level, for n = 1, 4, 16 rods.  The cost of
 the effect is the time per rhs call minus that of central gravity alone (same n); a straight-line
@@ -83,4 +83,4 @@ def bench_rows() -> list[dict]:
 if __name__ == "__main__":
     from ..bench import _print_table
 
-    _print_table("Environment effects of issue 13: rhs cost per body and per rod", bench_rows())
+    _print_table("Environment effects: rhs cost per body and per rod", bench_rows())

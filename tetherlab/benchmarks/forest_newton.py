@@ -1,5 +1,5 @@
 """RADAU5 on a forest (two root bodies): the dense Newton matrix against the structured one
-(issue 11; docs/integrators.md section 13, "Forests").
+(docs/integrators.md section 13, "Forests").
 
 The scene: two bench-libration-like systems on neighbouring circular orbits (7400 and 7410 km),
 each a 1000 kg root with a 5 km, 10 kg tether (EA = 5e4 N, damping 2e4 N s) to a 100 kg end mass,

@@ -1,4 +1,4 @@
-"""Cost of one IGRF evaluation against the truncation degree (issue 13: degree 13 in a few us).
+"""Cost of one IGRF evaluation against the truncation degree (target: degree 13 in a few us).
 
 The compiled kernel environment/igrf.py::field_ecef called from a compiled loop (points moving so
 nothing is constant-folded), degrees 1 to 13; the cost should grow as the number of coefficients,

@@ -1,5 +1,5 @@
 """Right-hand-side cost with a rigid root, three wheels and four tethers against the point-mass hub
-(issue 10), over rods per tether n = 4 ... 64, with the fitted exponent of cost against n.
+(docs/model.md 12), over rods per tether n = 4 ... 64, with the fitted exponent of cost against n.
 
 Both scenes: a 200 kg hub carrying four identical tethers (100 m, n rods each, 5 kg tips) in a
 circular orbit under central gravity; "rigid" makes the hub a rigid body (asymmetric inertia,

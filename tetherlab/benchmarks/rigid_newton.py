@@ -1,5 +1,5 @@
 """RADAU5 on scenes with a rigid body: the dense Newton matrix against the bordered structured one
-(issue 11; docs/integrators.md section 13).
+(docs/integrators.md section 13).
 
 The scenes are studies/scenes/deorbit-ed-rigid.toml (a 1063 kg rigid satellite, no wheels, the
 tether attached 1 m off its centre; 7 border unknowns) and studies/scenes/rigid-example.toml (a

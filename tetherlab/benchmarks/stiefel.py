@@ -1,9 +1,9 @@
 """Stiefel-Scheifele speed benchmark: tetherlab's best method against heyoka at equal final error.
 
-Two cases (issue 12): Stiefel & Scheifele's Example 2 (J2 + Moon, the paper's section 4.1 case,
+Two cases: Stiefel & Scheifele's Example 2 (J2 + Moon, the paper's section 4.1 case,
 ``ex2``) and their Example 1 (J2 only, 286.79660900 d, ``ex1``), each with its own reference.
 
-For each target final-position error (1 m and 1 mm; issue 3, "Speed"), every tetherlab candidate
+For each target final-position error (1 m and 1 mm; target ratios <= 0.5 and 0.8), every tetherlab candidate
 (Cowell and DROMO, each with DOP853 and Vern9, and DROMO with the constant-step
 Adams-Bashforth-Moulton method "abm") and heyoka (taylor_adaptive, double precision) is
 run over a grid of tolerances; for each the loosest tolerance that reaches the target is timed

@@ -1,6 +1,6 @@
 """Where the Stiefel-Scheifele time goes: tetherlab's pick (:data:`PICKS`: DROMO sigma form with
 Vern9 on Example 2, with the linear time element and ABM on Example 1) against heyoka, per
-right-hand-side call, per step and per Taylor order (issue 12; docs/integrators.md section 8).
+right-hand-side call, per step and per Taylor order (docs/integrators.md section 8).
 
 For each case (Example 2, J2 + Moon; Example 1, J2 only) and target final error (1 m, 1 mm), the
 loosest tolerance of the bench grid (:data:`.stiefel.TOLS`, :data:`.stiefel.HEYOKA_TOLS`) that
