@@ -1,4 +1,4 @@
-"""Bead (lumped-mass) model against TMED as the bead and rod counts grow (issue 4).
+"""Bead (lumped-mass) model against TMED as the bead and rod counts grow (docs/bead.md).
 
 Three quantities, each for n = 1, 2, 4, 8, 16, 32 interior beads and n TMED rods:
 

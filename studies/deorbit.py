@@ -10,7 +10,7 @@ and out-of-plane angles, strain, inclination against time), ``deorbit_summary.js
 ``--quick`` runs n = 1 without drag only.  The end condition (satellite altitude below 200 km) is
 a terminal event located by the integrator (:func:`tetherlab.benchmarks.deorbit.run_until_altitude`).
 
-DROMO against Cowell on the paper's own application (issue 12; :func:`dromo_vs_cowell`): the
+DROMO against Cowell on the paper's own application (:func:`dromo_vs_cowell`): the
 paper expects DROMO "to show better computational performance".  n = 1, the same scene in the
 time form of DROMO (formulation "dromo": a tether, and the stop event, run the time form) and in
 Cowell, with RADAU5 (the de-orbit's method) at rtol 1e-6 and 1e-8 and DOP853 at 1e-8; each
@@ -41,8 +41,8 @@ from tetherlab.scene import load_scene
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "studies" / "scenes"
 PAPER_DAYS = 35.0  # paper section 5: "The de-orbit lasts for approximately 35 days"
-PAPER_TOL = 0.15  # issue 3: within 15 % for n = 1
-CLOSED_FORM_TOL = 0.10  # issue 3: simulation within 10 % of the closed form
+PAPER_TOL = 0.15  # n = 1; the paper prints neither field model nor current law (gate deorbit_n1_vs_paper)
+CLOSED_FORM_TOL = 0.10  # the closed form's validity (docs/effects-electrodynamic.md section 5)
 
 
 def _git_commit() -> str:

@@ -1,4 +1,4 @@
-"""The fidelity ladder of issue 13: the electrodynamic de-orbit of paper section 5 at each
+"""The fidelity ladder (docs/environment.md section 6): the electrodynamic de-orbit of paper section 5 at each
 environment level, one change at a time from the paper's case.
 
 Levels (cumulative): the paper (aligned dipole 8e15 T m3, constant 2 A, no drag); tilted dipole;
@@ -122,7 +122,7 @@ def plot(series, path: Path) -> None:
     ax.set_xlim(1.0, None)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    ax.set_title("Electrodynamic de-orbit at each fidelity level (issue 13); dotted: the paper's 35 d", fontsize=9)
+    ax.set_title("Electrodynamic de-orbit at each fidelity level; dotted: the paper's 35 d", fontsize=9)
     from tetherlab.provenance import stamp_figure
 
     stamp_figure(fig, "studies/fidelity.py; studies/scenes/fidelity-paper.toml")
@@ -206,7 +206,7 @@ def markdown(rows, series, meta) -> str:
         notes.append(
             f"* J2 moves the de-orbit by {by['+J2']['delta_days']:+.2f} d ({by['+J2']['delta_rel']:+.1%}); the Sun and "
             f"Moon by {by['+Sun+Moon']['delta_days']:+.3f} d. The J2 shift is an interaction with IGRF's non-dipole "
-            "terms, measured in this session (IGRF-14 without drag): with the aligned or tilted dipole J2 changes the "
+            "terms, measured 2026-12-01 (IGRF-14 without drag): with the aligned or tilted dipole J2 changes the "
             "time by -0.16 d and -0.11 d; with IGRF truncated at degree 1, by -0.11 d; at degree 2 by +2.24 d, "
             "at degree 13 by +2.83 d. Without J2 the north-south asymmetry of the non-dipole field pumps the "
             "eccentricity along a fixed line of apsides (e = 0.0097 at the end, the satellite reaches 200 km at "

@@ -1,4 +1,4 @@
-"""Which formulation: Cowell against DROMO's time form on the hard eccentric tether case (issue 12).
+"""Which formulation: Cowell against DROMO's time form on the hard eccentric tether case (docs/integrators.md 9).
 
     PYTHONPATH=. python studies/formulation_choice.py OUTDIR
 

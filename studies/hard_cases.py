@@ -4,7 +4,7 @@
 
 Every case runs on a ladder of three tolerances a decade apart (rtol = atol = tau1 > tau2 > tau3:
 LADDER, or the case's own ``ladder``) through tetherlab.sweep (parallel, cached in OUTDIR/cache,
-resumable), with the summary tetherlab.summaries.invariants.  Issue 4's pass criterion is "no
+resumable), with the summary tetherlab.summaries.invariants.  The pass criterion is "no
 NaN, invariants within their stated bounds, results converging as the tolerance tightens, and a
 clear error (never garbage) where a case leaves the model's validity".  Here:
 
@@ -64,7 +64,7 @@ clear error (never garbage) where a case leaves the model's validity".  Here:
    errors move it by ~1e-9 s; a stop that is garbage, or an accident of the step size, does
    not repeat across a factor 100 in tolerance).
 
-5. **n = 512 rods stay stable over an orbit** (issue 11; studies/scenes/hard-n512.toml: the
+5. **n = 512 rods stay stable over an orbit** (studies/scenes/hard-n512.toml: the
    bench-libration tether in 512 rods of 9.77 m, damped D = 2e4 N s, energy model, swinging from
    theta0 = 30 deg, started straight and unstrained; one run, radau5 at the scene's 1e-9, the
    structured O(n) Newton matrix).  Stable means, physically (docs/verification.md section 5):
@@ -382,7 +382,7 @@ def n512_negative_control(scene) -> dict:
 
 
 def n512_md(r: dict, control: dict | None) -> list[str]:
-    md = ["", "### n = 512 rods over one orbit (issue 11)", "",
+    md = ["", "### n = 512 rods over one orbit", "",
           "studies/scenes/hard-n512.toml: 512 rods of 9.77 m, D = 2e4 N s, energy model, theta0 = 30 deg, straight and "
           "unstrained start, one orbit, radau5 (structured Newton matrix). Stable (part 5 of studies/hard_cases.py, "
           "docs/verification.md 5): the run ends; every rod's |strain| inside the static envelope of the librating "
@@ -412,7 +412,7 @@ def _g(v, fmt=".3g"):
 
 def report_md(rows, recs_by_case, control: dict | None = None, n512=None) -> str:
     md = ["## Hard cases", "",
-          "Each case runs on three tolerances a decade apart (column ladder). Pass (issue 4): no NaN in any run; at "
+          "Each case runs on three tolerances a decade apart (column ladder). Pass: no NaN in any run; at "
           "the tightest tolerance the invariants within their round-off bounds; results converging as the tolerance "
           "tightens; a case outside the model's validity stopping with a SimulationError naming the rod. The bounds "
           "are derived, not fitted (full derivation: studies/hard_cases.py):", "",

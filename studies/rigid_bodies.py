@@ -1,4 +1,4 @@
-"""Rigid bodies, wheels and hub-and-spoke against the independent oracles (issue 10).
+"""Rigid bodies, wheels and hub-and-spoke against the independent oracles (docs/rigid-oracles.md).
 
 Every expected value comes from tetherlab/oracles/{spinning_spokes, torque_free, gg_attitude,
 wheel_exchange}.py (numpy/scipy only, derivations in docs/rigid-oracles.md, data and provenance in
@@ -856,7 +856,7 @@ def _fmt(v):
 
 
 def write_report(out: Path, ref: dict, rows: dict, gates: dict, notes: dict) -> None:
-    lines = ["## Rigid bodies, wheels and hub-and-spoke against the oracles (issue 10)", "",
+    lines = ["## Rigid bodies, wheels and hub-and-spoke against the oracles", "",
              "Oracles: tetherlab/oracles/{spinning_spokes, torque_free, gg_attitude, wheel_exchange}.py "
              "(numpy/scipy only; docs/rigid-oracles.md; references/rigid_bodies). Bounds: docs/rigid-oracles.md section 7.", ""]  # fmt: skip
     lines += ["Gate values:", "", *_table([{"gate": k, "value": v} for k, v in gates.items()]), ""]

@@ -1,4 +1,4 @@
-"""The scenes of issue 10: rigid bodies with wheels and attitude control, hub and spoke, a chain of
+"""The scenes of docs/model.md 12: rigid bodies with wheels and attitude control, hub and spoke, a chain of
 three satellites, and the electrodynamic de-orbit with a rigid satellite.
 
 Writes into OUT_DIR ``rigid_scenes.md`` (a table per scene: status, wall time, first integrals),
@@ -75,7 +75,7 @@ def main(argv=None) -> int:
     from tetherlab.provenance import footer, stamp_figure
 
     rows = []
-    lines = ["# Rigid bodies, wheels, trees (issue 10)", ""]
+    lines = ["# Rigid bodies, wheels, trees", ""]
 
     # -- rigid satellite, three wheels, PD hold, tether at an offset point -----------------------
     res, wall = _run("rigid-wheels-control", **({"duration": "1200 s"} if args.quick else {}))
@@ -166,7 +166,7 @@ def main(argv=None) -> int:
     df = pd.DataFrame(rows)
     df.to_csv(out / "rigid_scenes.csv", index=False)
     lines += [
-        "Every scene of issue 10, run as shipped" + (" (shortened: --quick)" if args.quick else "") + ".",
+        "Every rigid-body scene, run as shipped" + (" (shortened: --quick)" if args.quick else "") + ".",
         "`angmom_error_internal_max`: largest |H(t) - H(0)| over the system's own angular momentum about",
         "its centre of mass (rigid spins included); `energy_error_rel_max`: relative energy change (not an",
         "error where motors work or tethers are damped); `quat_norm_error_max`: largest |1 - |q||.",

@@ -28,7 +28,7 @@ TOLS = tuple(10.0**-k for k in range(4, 14))
 #: 12 for DOP853 and 16 for Vern9: compare its n_rhs, not its steps; docs/integrators.md section 8)
 CASES = (("cowell", "dop853"), ("cowell", "vern9"), ("cowell", "radau5"), ("dromo", "dop853"),
          ("dromo", "vern9"), ("dromo", "radau5"), ("dromo", "abm"))
-#: Example 1 (J2 only, its own reference; issue 12): the sigma form with tau and with the linear time
+#: Example 1 (J2 only, references/stiefel/example1.json): the sigma form with tau and with the linear time
 #: element ("dromo+te", docs/dromo.md section 11), rows "ex1 tetherlab ..."; the gate
 #: stiefel_example1_te_error reads the dromo+te abm row at 1e-11 (tetherlab/verify.py)
 EX1_CASES = (("dromo", "vern9"), ("dromo+te", "vern9"), ("dromo+te", "abm"))

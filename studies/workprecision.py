@@ -16,7 +16,7 @@ deg) over one orbit, n = 1, 2, 4 rods; integrators dop853 and radau5 at rtol = a
 Also the Stiefel-Scheifele problem with Cowell and DROMO against the stored oracle, and one day of
 the de-orbit scene (n = 1) against dop853 at 1e-14.
 
-Rod count as an axis (issue 11): the damped libration scene (studies/scenes/bench-libration.toml,
+Rod count as an axis (docs/verification.md 7): the damped libration scene (studies/scenes/bench-libration.toml,
 D = 2e4 N s, theta0 = 30 deg, one orbit) at n = 4, 8, ..., 128 rods, radau5 with its structured
 O(n) Newton matrix at rtol = atol = 1e-5 ... 1e-10, each against a radau5 reference at 1e-11 of
 the same n (the error of the discretisation in n is not in these numbers: each n is its own
@@ -64,7 +64,7 @@ REFERENCE = ("dop853", 1e-14)
 #: (heyoka clamps a tolerance below the epsilon to it: 1e-16 gives the epsilon's run, 7.3e-4 m)
 HEYOKA_TOLS = TOLERANCES + [1e-14, 1e-15, float(np.finfo(float).eps)]
 HEYOKA_CASE = "Stiefel heyoka"
-#: the rod-count axis (issue 11): damped libration, radau5 (structured Newton), reference of the same n
+#: the rod-count axis: damped libration, radau5 (structured Newton), reference of the same n
 ROD_AXIS_RODS = (4, 8, 16, 32, 64, 128)
 ROD_AXIS_TOLS = [10.0**-k for k in range(5, 11)]
 ROD_AXIS_REFERENCE = ("radau5", 1e-11)
