@@ -31,11 +31,11 @@ _spec.loader.exec_module(study)
 
 R0 = 7.4e6  # m, circular orbit of the scenes (paper section 4.3)
 OMEGA = math.sqrt(MU_EARTH / R0**3)
-M0, MF, MT, L, EA = 1000.0, 100.0, 10.0, 5000.0, 5e4  # the scenes' tether (issue 2 benchmark)
+M0, MF, MT, L, EA = 1000.0, 100.0, 10.0, 5000.0, 5e4  # the scenes' tether (bench-libration.toml)
 
 
 def test_bead_model_independent_of_tmed_code():
-    # The oracle must share no tether code with TMED (issue 4): check the imports in its sources.
+    # The oracle must share no tether code with TMED (an independent path): check the imports in its sources.
     import tetherlab.oracles as pkg
 
     for path in (ROOT / "tetherlab" / "oracles").glob("*.py"):
@@ -71,7 +71,7 @@ def test_energy_is_conserved_without_damping():
 
 
 def test_vertical_equilibrium_stays_vertical():
-    # Paper section 4.3 / issue 2 gate for TMED (1e-6 rad over the run): the bead model's own
+    # Paper section 4.3 / gate vertical_equilibrium for TMED (1e-6 rad over the run): the bead model's own
     # relative equilibrium must stay on the local vertical just as well.
     scene = load_scene(SCENES / "vertical-equilibrium.toml").replace(**{"duration": "1 orbits", "output.count": 51})
     bs = BS.bead_from_scene(scene, 3)
@@ -136,7 +136,7 @@ def test_fit_frequencies_recovers_a_known_signal():
 
 def test_libration_bead_and_tmed_agree_small_n():
     # Rigid in-plane libration (docs/bead.md A2): both models within 0.1 % of sqrt3 omega x the
-    # elliptic correction (the 0.2 % gate of issue 2 halved), and within 1e-5 of each other.
+    # elliptic correction (the 0.2 % libration gate halved), and within 1e-5 of each other.
     ref = study.libration_reference(2.0)
     tm = study.libration_tmed(2, 2.0)
     bd = study.libration_bead(2, 2.0)

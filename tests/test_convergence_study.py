@@ -1,5 +1,5 @@
 """studies/convergence.py: the cost table (trend over the rod count and its fitted exponent) and the
-study's grid (issue 11: n = 256 for the three quantities).  The study itself runs in make verify."""
+study's grid (n = 256 for the three quantities).  The study itself runs in make verify."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def conv():
 
 
 def test_grid_reaches_256():
-    # issue 11: n = 256 for the three quantities inside the 15-minute verify (the libration at
+    # n = 256 for the three quantities inside a 15-minute make verify (the libration at
     # n = 256 took > 330 s before the RADAU5 round-off fix, 9 s after: studies/convergence.toml)
     study = load_study(ROOT / "studies" / "convergence.toml")
     assert int(study.options["max_rods"]) == 256

@@ -1,4 +1,4 @@
-"""Events with DROMO (issue 12): ``[stop] altitude`` and tension-only switches, located in the
+"""Events with DROMO (docs/dromo.md section 10): ``[stop] altitude`` and tension-only switches, located in the
 time form on the same event functions of the physical state as with Cowell
 (formulations/dromo.py ``dromo_time_events``; docs/dromo.md section 8).
 

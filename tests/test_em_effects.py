@@ -1,4 +1,4 @@
-"""Magnetic field, electrodynamic force, drag and the electrodynamic de-orbit (issue 3).
+"""Magnetic field, electrodynamic force, drag and the electrodynamic de-orbit (paper section 5).
 
 Expected values come from the dipole formula (Jackson, Classical Electrodynamics, 3rd ed., eq.
 5.56) with the IGRF-13 2020 coefficients (Alken et al. 2021), Vallado Table 8-4, and the closed
@@ -305,7 +305,7 @@ def test_one_day_decay_rate_matches_closed_form():
 @pytest.mark.slow
 @pytest.mark.parametrize("rods", [1, 4])
 def test_deorbit_time_against_paper_and_closed_form(rods):
-    # Paper section 5: about 35 days with one rod; issue 3: within 15 %, and within 10 % of the
+    # Paper section 5: about 35 days with one rod; within 15 % (gate deorbit_n1_vs_paper), and 10 % of the
     # closed form (docs section 5).  The end condition: satellite altitude 200 km.
     from tetherlab.benchmarks.deorbit import DAY_S, run_until_altitude
 

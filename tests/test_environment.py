@@ -1,4 +1,4 @@
-"""Environment fidelity levels of issue 13: Earth rotation angle, IGRF-14, OML current, NRLMSIS 2.1
+"""Environment fidelity levels: Earth rotation angle, IGRF-14, OML current, NRLMSIS 2.1
 table, eclipse.  Every expected value has its source in a comment; derivations in
 docs/environment.md and docs/effects-oml.md."""
 
@@ -52,7 +52,7 @@ def test_explicit_greenwich_angle_wins_over_the_epoch():
 
 def test_igrf_kernel_matches_ppigrf_reference_to_0p1_nT():
     """references/igrf/reference.json: ppigrf's own IGRF-14 evaluation at 1200 random points and
-    dates (build_reference.py); tolerance 0.1 nT from the issue (and the provenance)."""
+    dates (build_reference.py); tolerance 0.1 nT (reference.json "tolerance_nT")."""
     import datetime as dt
 
     from tetherlab.environment import igrf

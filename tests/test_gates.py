@@ -20,7 +20,7 @@ def test_every_gate_has_quantity_threshold_unit_source():
     gates = _gates()
     assert len(gates) >= 10
     for gid, g in gates.items():
-        # budget: the error budget or the stated reason behind the threshold (issue 14)
+        # budget: the error budget or the stated reason behind the threshold (docs/verification.md 1)
         assert {"quantity", "threshold", "unit", "source", "budget"} <= set(g) <= {
             "quantity", "threshold", "unit", "source", "budget", "kind"}, gid
         assert isinstance(g["threshold"], (int, float)) and math.isfinite(g["threshold"]) and g["threshold"] >= 0, gid
@@ -47,7 +47,7 @@ def test_every_gate_is_measured_by_verify():
 def test_every_gate_has_a_probe_or_a_reason_to_have_none():
     # The negative controls (make verify) run each deliberate defect against the probes of
     # tetherlab.verify.PROBES; a gate outside every probe must say in TOOTHLESS why it has no teeth
-    # (issue 14), or the mutation_toothless_unexplained gate fails at verify time.
+    # (docs/verification.md 2), or the mutation_toothless_unexplained gate fails at verify time.
     from tetherlab import verify
 
     probed = {g for gs in verify._PROBE_GATES.values() for g in gs}

@@ -170,7 +170,7 @@ def test_egm2008_constants():
 
 def test_chebyshev_fit_matches_skyfield():
     # Compare the compiled Clenshaw evaluation with skyfield called here directly (not through
-    # tetherlab.ephemeris), at times that are not fit nodes.  Requirement (issue 3): < 1 m.
+    # tetherlab.ephemeris), at times that are not fit nodes.  Bound: < 1 m (docs/effects-gravity.md 3).
     from astropy.time import Time
     from skyfield.api import Loader, load_file
 

@@ -1,4 +1,4 @@
-"""studies/hard_cases.py: the pass criterion of the hard cases (issue 4) has teeth.
+"""studies/hard_cases.py: the pass criterion of the hard cases has teeth.
 
 Synthetic run records (tetherlab.sweep.RunRecord) exercise each part of the criterion: invariants
 against their round-off bounds, convergence as the tolerance tightens (a ladder that does not
@@ -147,7 +147,7 @@ def test_collapse_must_be_a_clear_repeatable_error(hc, scene):
     assert "expected a SimulationError" in hc.check("c", {}, crit, ran, scene)["reasons"][0]
 
 
-# -- part 5: n = 512 over an orbit (issue 11) ---------------------------------------------------
+# -- part 5: n = 512 over an orbit (docs/verification.md section 5) -----------------------------
 MU_EARTH = 3.986004418e14  # the "earth" preset of tetherlab/scene.py
 
 
@@ -158,7 +158,7 @@ def scene512():
 
 def test_n512_scene_is_the_case_the_issue_names(scene512):
     t = scene512.tethers[0]
-    # issue 11: "a hard case at n = 512 that must stay stable over an orbit"; damped, energy model
+    # "n = 512 rods stay stable over an orbit" (studies/hard_cases.py part 5); damped, energy model
     assert t.rods == 512 and t.damping_N_s == 2e4 and t.model == "energy"
     assert scene512.duration_orbits == 1.0 and scene512.orbit.motion == "corotating"  # no special start
     assert scene512.integrator.method == "radau5"

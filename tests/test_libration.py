@@ -4,8 +4,8 @@ Expected values: a rigid dumbbell whose centre of mass is on a circular orbit of
 omega librates in the orbital plane at sqrt(3)*omega and out of it at 2*omega for small
 amplitudes (Beletsky & Levin, Dynamics of Space Tether Systems, 1993, ch. 2; the paper quotes both
 in section 4.3).  The amplitude correction for theta0 = 0.05 rad is -theta0^2/4 = -0.06 % in plane
-(the pitch equation is a pendulum in 2*theta) and smaller out of plane, inside the 0.2 % gate of
-issue 2.  The tether is nearly rigid: its gravity-gradient strain is ~3e-5.
+(the pitch equation is a pendulum in 2*theta) and smaller out of plane, inside the 0.2 % gate
+(references/gates.toml).  The tether is nearly rigid: its gravity-gradient strain is ~3e-5.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def test_in_plane_frequency_is_sqrt3_omega(rods):
     d = res.diagnostics
     omega = math.sqrt(MU_EARTH / d["com_radius_m"].iloc[0] ** 3)
     f = zero_crossing_frequency(d["t_s"].to_numpy(), d["main.theta_rad"].to_numpy())
-    assert abs(f / (math.sqrt(3.0) * omega) - 1.0) < 2e-3  # issue 2 gate: 0.2 %
+    assert abs(f / (math.sqrt(3.0) * omega) - 1.0) < 2e-3  # gate libration_inplane_frequency
     assert np.max(np.abs(d["main.phi_rad"])) < 1e-9  # stays in the orbital plane
 
 
@@ -53,13 +53,13 @@ def test_out_of_plane_frequency_is_2_omega(rods):
     d = res.diagnostics
     omega = math.sqrt(MU_EARTH / d["com_radius_m"].iloc[0] ** 3)
     f = zero_crossing_frequency(d["t_s"].to_numpy(), d["main.phi_rad"].to_numpy())
-    assert abs(f / (2.0 * omega) - 1.0) < 2e-3  # issue 2 gate: 0.2 %
+    assert abs(f / (2.0 * omega) - 1.0) < 2e-3  # gate libration_outofplane_frequency
 
 
 @pytest.mark.parametrize("rods", [1, 2])
 def test_local_vertical_is_a_relative_equilibrium(rods):
     # Paper section 4.3: "When initially aligned with the local vertical, the tether continues in
-    # such relative equilibrium configuration".  Gate (issue 2): within 1e-6 rad over 10 orbits.
+    # such relative equilibrium configuration".  Gate vertical_equilibrium: within 1e-6 rad over 10 orbits.
     scene = load_scene(SCENES / "vertical-equilibrium.toml").replace(**{"tethers.main.rods": rods})
     res = simulate(scene, progress=False)
     d = res.diagnostics

@@ -1,4 +1,4 @@
-"""The deliberate defects of tetherlab/mutants.py (negative controls of the gates, issue 14).
+"""The deliberate defects of tetherlab/mutants.py (negative controls of the gates, docs/verification.md 2).
 
 What is checked here, fast: no user run can carry a defect (the switch is 0 / 1 as built from any
 shipped scene), switching one on and off leaves nothing behind, and the cheapest defect/gate pairs
@@ -64,7 +64,7 @@ def test_every_active_defect_names_gates_that_exist_and_the_rigid_defects_are_ac
         assert set(m.gates) <= set(GATES), m.name
         if m.status == "active":
             assert m.gates and (m.mutate or m.patch), m.name
-    # issue 10's defects share the kernel's header slot (kernel/layout.py H_DEFECT = H_MUTANT)
+    # the rigid-body defects share the kernel's header slot (kernel/layout.py H_DEFECT = H_MUTANT)
     assert {"rigid_attachment_not_rotated", "rigid_centripetal_dropped"} <= set(mutants.names())
     assert L.H_MUTANT == L.H_DEFECT
 

@@ -1,4 +1,4 @@
-"""RADAU5's structured Newton matrix for forests: several root bodies (issue 11; docs/integrators.md
+"""RADAU5's structured Newton matrix for forests: several root bodies (docs/integrators.md
 section 13, "Forests").
 
 The trees of a forest share no joint, so the Newton matrix is block diagonal over them and the

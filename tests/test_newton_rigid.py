@@ -1,4 +1,4 @@
-"""The bordered structured Newton matrix of RADAU5 for scenes with rigid bodies (issue 11;
+"""The bordered structured Newton matrix of RADAU5 for scenes with rigid bodies (
 docs/integrators.md section 13).
 
 * The bordered solve (tether solve S_t + Schur complement on the attitude and wheel unknowns w)

@@ -91,7 +91,7 @@ def test_small_report_images_resolve_and_links_have_targets(tmp_path):
     page = _small_report(tmp_path)
     assert page_problems(page) == []
     text = page.read_text()
-    # the summary at the top: gates passed, mutation score, wall time, commit (issue 14)
+    # the summary at the top: gates passed, mutation score, wall time, commit
     head = text[: text.index('id="contents"')]
     for word in ("gates passed", "mutation score", "wall time", "0123456789"):
         assert word in head, word

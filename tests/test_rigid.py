@@ -1,4 +1,4 @@
-"""Rigid bodies, momentum wheels, attachment points and tether trees (issue 10; docs/model.md 12).
+"""Rigid bodies, momentum wheels, attachment points and tether trees (docs/model.md 12).
 
 What is checked, and the source of every expected value:
 
@@ -14,9 +14,9 @@ What is checked, and the source of every expected value:
   dH/dt and dE/dt computed here from (y, y') vanish to round-off, and the two deliberate defects
   of kernel/layout.py (attachment vector unrotated; omega x (omega x rho) dropped) break them;
   plus a short integrated run holding P, H and E to 1e-10 relative (Basilisk's reaction-wheel
-  level, as issue 10 asks);
+  level, _Documentation/secTest.tex);
 * untethered bodies in one scene: the same right-hand side, bit for bit, as single-body scenes;
-* bad input: a SceneError naming the key for each case of issue 10.
+* bad input: a SceneError naming the key for each bad rigid-body, wheel, control or attachment key.
 """
 
 from __future__ import annotations
@@ -581,7 +581,7 @@ def test_negative_controls_break_the_first_integrals(defect, broken):
 def test_first_integrals_over_a_run():
     # DOP853 at rtol = atol = 1e-13 over 20 s: P (not linear in the state once a rigid body sits
     # at a tether's end), H and E drift by the integration error only; bound 1e-10 of the
-    # internal scales (Basilisk's reaction-wheel tests' level, issue 10)
+    # internal scales (Basilisk's reaction-wheel tests' level)
     sc = _free_tree().replace(**{"integrator.rtol": 1e-13, "integrator.atol": 1e-13, "output.count": 5})
     res = simulate(sc, progress=False)
     g = res.diagnostics

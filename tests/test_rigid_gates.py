@@ -1,4 +1,4 @@
-"""The simulator against the rigid-body oracles (issue 10): the gates of studies/rigid_bodies.py.
+"""The simulator against the rigid-body oracles (docs/rigid-oracles.md 7): the gates of studies/rigid_bodies.py.
 
 Expected values: tetherlab/oracles/{spinning_spokes, torque_free, gg_attitude, wheel_exchange}.py
 and references/rigid_bodies/reference.json (docs/rigid-oracles.md); bounds: the study's

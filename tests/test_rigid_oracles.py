@@ -1,4 +1,4 @@
-"""Self-checks of the rigid-body oracles (issue 10), without the simulator.
+"""Self-checks of the rigid-body oracles (docs/rigid-oracles.md), without the simulator.
 
 Each oracle (tetherlab/oracles/{torque_free, gg_attitude, spinning_spokes, wheel_exchange}.py,
 derivations in docs/rigid-oracles.md) is checked against a second, independent method: the

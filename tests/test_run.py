@@ -159,7 +159,7 @@ def test_integrators_agree_on_the_benchmark_scene(method):
 
 
 def test_a_chain_runs_from_its_explicit_states():
-    # issue 10: a chain a - b - c (once refused) runs; at t = 0 every body sits at its explicit
+    # a chain a - b - c (not a star) runs; at t = 0 every body sits at its explicit
     # state (the layout's straight tethers between placed ends), and with no effect the total
     # momentum keeps its initial value to round-off (bound: 1e-12 N s, ~1e3 eps of the
     # |m v| ~ 10 kg x 0.1 m/s terms summed; RK steps conserve a linear invariant exactly up to

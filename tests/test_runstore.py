@@ -1,4 +1,4 @@
-"""Runs that lose nothing (issue 14): outputs written as the run goes, checkpoints, resumption
+"""Runs that lose nothing (docs/runs.md): outputs written as the run goes, checkpoints, resumption
 bit for bit, Ctrl-C and kill -9 mid-run, unwritable output directories, a NaN from an effect.
 
 Expected values here are not numbers from a model but identities: a resumed run must reproduce
@@ -294,7 +294,7 @@ def test_huge_output_count_is_refused_naming_the_key(monkeypatch):
     _machine(monkeypatch, 16.0)
     calls = _interrupt_on_call(monkeypatch, 10**9)
     scene = load_scene(SCENES / "libration-inplane.toml").replace(**{"output.count": 200_000_000})
-    # the output buffer alone: 2e8 rows x 18 floats x 8 B = 26.8 GiB > 16 GiB (issue 14's figure)
+    # the output buffer alone: 2e8 rows x 18 floats x 8 B = 26.8 GiB > 16 GiB (numpy's figure when it failed)
     with pytest.raises(SceneError) as info:
         simulate(scene, progress=False)
     assert info.value.key == "output.count"
@@ -306,7 +306,7 @@ def test_huge_output_count_is_refused_naming_the_key(monkeypatch):
 def test_huge_rod_count_is_refused_naming_the_tether(monkeypatch):
     _machine(monkeypatch, 4.0)
     scene = load_scene(SCENES / "libration-inplane.toml").replace(**{"tethers.main.rods": 200_000})
-    # 1001 rows x 6 (1 + 2e5) floats x 8 B = 8.95 GiB of output buffer > 4 GiB (issue 14's figure)
+    # 1001 rows x 6 (1 + 2e5) floats x 8 B = 8.95 GiB of output buffer > 4 GiB (numpy's figure too)
     with pytest.raises(SceneError) as info:
         simulate(scene, progress=False)
     assert info.value.key == "tethers.main.rods" and "rods = 200000" in str(info.value)

@@ -479,7 +479,7 @@ CASES = {
     "from no body": ({"tethers.main.from": "M0"}, "tethers.main.from", "'M0' (no such body)", "did you mean 'm0'?"),
     "to no body": ({"tethers.main.to": "mff"}, "tethers.main.to", "did you mean 'mf'?"),
     "same body twice": ({"tethers.main.to": "m0"}, "tethers.main.to", "same body at both ends"),
-    # a body may end several tethers (trees, issue 10), but a closed loop is refused naming the
+    # a body may end several tethers (trees), but a closed loop is refused naming the
     # tether that closes it (docs/scenes.md, forests)
     "loop of tethers": ({"bodies.m2": {"mass": "1 kg"},
                          "tethers.second": {"from": "m2", "to": "mf", "rods": 1, "length": "1 km", "EA": "1 N", "mass": "1 kg"},
@@ -599,14 +599,14 @@ def test_explicit_ends_with_an_initial_shape():
 
 
 def test_two_tethers_joining_the_same_pair_close_a_loop():
-    # issue 10: the kernel solves trees; two tethers between the same pair form a loop, refused at
+    # the kernel solves trees; two tethers between the same pair form a loop, refused at
     # load naming the second one (it closes the loop)
     d = variant({"tethers.back": {"from": "mf", "to": "m0", "rods": 1, "length": "5 km", "EA": "5e4 N", "mass": "1 kg"}})
     fails(d, "tethers.back", "no closed loop", "closes a loop between 'mf' and 'm0'")
 
 
 def test_a_body_may_end_two_tethers():
-    # a chain written towards its middle body: m0 -> mf <- m2 (issue 10 lifted "at most one")
+    # a chain written towards its middle body: m0 -> mf <- m2 (trees allow any number of tethers per body)
     d = variant({"bodies.m2": {"mass": "1 kg"},
                  "tethers.second": {"from": "m2", "to": "mf", "rods": 1, "length": "1 km", "EA": "1 N", "mass": "1 kg"}})
     scene = Scene.from_dict(d)

@@ -1,4 +1,4 @@
-"""Property test (issue 14): every scene, valid or not, either is refused with a SceneError that
+"""Property test: every scene, valid or not, either is refused with a SceneError that
 names a key, or runs to completion with finite outputs, or stops with a SimulationError that says
 when (a time), and why -- no other exception type, ever.
 

@@ -37,7 +37,7 @@ def test_scene_is_the_definition(scene):
 @pytest.mark.parametrize(
     "formulation, tol, bound_m",
     [
-        # measured 0.042 m (cowell) and 0.0027 m (dromo) at 1e-13; issue 3 asks for < 1 m
+        # measured 0.042 m (cowell) and 0.0027 m (dromo) at 1e-13; paper section 4.1: < 1 m
         ("cowell", 1e-13, 1.0),
         ("dromo", 1e-13, 1.0),
         # the time form (made for tethers) is less accurate on this orbit: 0.21 m measured
@@ -69,6 +69,6 @@ def test_dromo_beats_cowell_at_equal_tolerance(scene):
 
 def test_published_eq52_against_reference():
     d = np.linalg.norm(EQ52_M - REF_POS_M)
-    # 0.186 m (reference.json "published.distance_to_reference_m"); issue 3: within 1 m
+    # 0.186 m (reference.json "published.distance_to_reference_m"); required: within 1 m
     assert d == pytest.approx(REF["published"]["distance_to_reference_m"], rel=1e-6)
     assert d < 1.0

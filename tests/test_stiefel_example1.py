@@ -1,4 +1,4 @@
-"""Stiefel & Scheifele's Example 1 (J2 only, 286.79660900 d; issue 12): the reference file and
+"""Stiefel & Scheifele's Example 1 (J2 only, 286.79660900 d): the reference file and
 tetherlab against it.
 
 Expected values: references/stiefel/example1.json (built by references/stiefel/build_example1.py:
@@ -20,7 +20,7 @@ from tetherlab.scene import load_scene
 
 REF = json.loads((ROOT / "references" / "stiefel" / "example1.json").read_text())
 REF_POS_M = np.array([float(x) for x in REF["final_state"]["position_km"]]) * 1e3
-T_FINAL_S = 286.79660900 * 86400.0  # issue 12 (Stiefel & Scheifele 1971, sect. 23, Example 1)
+T_FINAL_S = 286.79660900 * 86400.0  # Stiefel & Scheifele 1971, sect. 23, Example 1
 
 
 def _dist_m(a, b) -> float:
@@ -56,7 +56,7 @@ def test_scene_is_example_1():
 
 
 def test_dromo_reaches_the_reference_within_1_m():
-    """The issue's 1 m target: DROMO (sigma form, Vern9) at tol 1e-13; measured 0.052 m (the
+    """Paper section 4.1's 1 m, on Example 1: DROMO (sigma form, Vern9) at tol 1e-13; measured 0.052 m (the
     end point is near perigee, ~9 km/s: along-track errors weigh 25x more than in Example 2)."""
     sc = load_scene(SCENES / "stiefel-example1.toml")
     res = simulate(sc.replace(**{"integrator.rtol": 1e-13, "integrator.atol": 1e-13}), progress=False)

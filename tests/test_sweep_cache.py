@@ -1,4 +1,4 @@
-"""The sweep cache under faults (issue 14): a corrupt or truncated entry is recomputed and never
+"""The sweep cache under faults (docs/runs.md): a corrupt or truncated entry is recomputed and never
 read as a result; two sweeps writing one cache directory at once leave only whole entries.
 
 The summary is the Keplerian period 2 pi sqrt(a^3 / mu) (tests/test_sweep.py::orbit_period): an

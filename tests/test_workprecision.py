@@ -38,7 +38,7 @@ def _no_heyoka(monkeypatch):
 
 
 def test_heyoka_grid_reaches_the_double_floor(wp):
-    # issue 4: tolerances 1e-4 ... 1e-13 at least, and tighter to heyoka's accuracy floor
+    # tolerances 1e-4 ... 1e-13 at least, and tighter to heyoka's accuracy floor
     assert all(t in wp.HEYOKA_TOLS for t in wp.TOLERANCES)
     assert min(wp.HEYOKA_TOLS) == sys.float_info.epsilon
     assert wp._tol_str(1e-13) == "1e-13" and wp._tol_str(sys.float_info.epsilon) == "2.22e-16"
@@ -116,10 +116,10 @@ def test_heyoka_summary_matches_the_stored_heyoka_rows(wp):
         assert s["wall_s"] > 0 and "n_rhs" not in s  # a Taylor method has no rhs evaluations
 
 
-# -- rod count as an axis (issue 11) -------------------------------------------------------------
+# -- rod count as an axis (docs/verification.md section 7) --------------------------------------
 def test_rod_axis_cases_are_damped_libration_against_a_reference_of_the_same_n(wp):
     cases = wp.rod_axis_cases()
-    # issue 11: "error against wall time at n = 4 ... 128"
+    # error against wall time at n = 4 ... 128 (studies/workprecision.py ROD_AXIS_RODS)
     assert [c.scene.tethers[0].rods for c in cases] == [4, 8, 16, 32, 64, 128]
     for c in cases:
         t = c.scene.tethers[0]
