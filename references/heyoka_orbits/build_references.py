@@ -1,4 +1,4 @@
-"""Build tether-free orbit references for the gravity effects with heyoka (issue 4, oracles).
+"""Build tether-free orbit references for the gravity effects with heyoka (an oracle sharing no code with tetherlab).
 
 Three point-mass problems, each integrated by heyoka's Taylor method in IEEE binary128
 (``heyoka.real128``, tolerance 2^-112) and, as a cross-check, in double at tolerance 1e-15:
@@ -142,7 +142,7 @@ def main() -> int:
 
     started = time.perf_counter()
     out = {
-        "what": "tether-free point-mass orbits with the gravity effects (tetherlab issue 4, heyoka oracle)",
+        "what": "tether-free point-mass orbits with the gravity effects (tetherlab, heyoka oracle)",
         "units": {"length": "m", "time": "s", "velocity": "m/s"},
         "state_layout": "x, y, z, vx, vy, vz",
         "constants": {

@@ -1,4 +1,4 @@
-"""Build the rigid-body oracle data (issue 10): torque-free body, gravity-gradient libration,
+"""Build the rigid-body oracle data (docs/rigid-oracles.md): torque-free body, gravity-gradient libration,
 hub-and-spoke steady state, wheel momentum exchange.
 
 Every value comes from tetherlab/oracles/{torque_free, gg_attitude, spinning_spokes,

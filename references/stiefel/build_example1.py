@@ -3,7 +3,7 @@
 Problem: E. Stiefel & G. Scheifele, *Linear and Regular Celestial Mechanics*, Springer 1971,
 sect. 23, Example 1 -- the Earth's central field and its J2 term, no Moon; the initial state of
 Example 2 (/work/shared/references/stiefel-scheifele.md: perigee of an e = 0.95 orbit inclined
-30 deg) and t_f = 286.79660900 d (issue 12).  The book's published final position of Example 1
+30 deg) and t_f = 286.79660900 d.  The book's published final position of Example 1
 is not available to this project, so none is compared here.
 
 The same two independent computations as ``build_reference.py`` (whose functions are reused with
@@ -38,7 +38,7 @@ sys.path.insert(0, str(HERE))
 import build_reference as br  # noqa: E402  (the Example 2 builder: equations and methods)
 
 OUT_JSON = HERE / "example1.json"
-TF_DAYS = "286.79660900"  # Stiefel & Scheifele (1971) sect. 23, Example 1 (issue 12)
+TF_DAYS = "286.79660900"  # Stiefel & Scheifele (1971) sect. 23, Example 1
 #: Example 1 is Example 2 without the Moon: its mass set to zero switches the Moon terms off in
 #: both methods (heyoka: the parameter par[3]; decimal: the constant mum).
 CONST = dict(br.CONST, mu_moon_km3_s2="0")
