@@ -19,7 +19,7 @@ How a defect is switched on, and why it can never reach a user's run:
   copy of a kernel (DOP853's error coefficient), installed for the duration of :func:`active`
   only.
 
-The defects of the rigid-body issue (attachment vector not rotated, omega x (omega x r) dropped)
+The rigid-body defects (attachment vector not rotated, omega x (omega x r) dropped)
 are run by studies/rigid_bodies.py itself (no cheap probe exercises a rigid body); verify credits
 them from that study's control gate, as it credits eq. 20 from the hard cases' control.
 
@@ -280,7 +280,7 @@ MUTANTS = {
             mutate=_flag(L.MUT_NO_ELASTIC_E),
             path="diagnostics",
         ),
-        # -- the rigid-body defects of issue 10: the kernel's DEFECT_* codes in the same header slot.
+        # -- the rigid-body defects: the kernel's DEFECT_* codes in the same header slot.
         # No cheap probe of the harness runs a rigid body; studies/rigid_bodies.py runs both itself
         # (part B, rigid hub at a radius) and verify credits them from its control gate.
         Mutant(

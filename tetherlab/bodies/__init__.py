@@ -1,4 +1,4 @@
-"""Rigid bodies with momentum wheels and attitude control (issue 10, paper section 2.5).
+"""Rigid bodies with momentum wheels and attitude control (paper section 2.5).
 
 rigid.py: quaternion kinematics, rotation matrices, Euler's equations' terms, gravity-gradient
 torque; wheels.py: motor torques with their limits; control.py: the quaternion-feedback PD law.

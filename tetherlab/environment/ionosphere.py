@@ -9,7 +9,7 @@ with h = |r| - R (spherical Earth).  Defaults: N_max = 1e12 m^-3, h_max = 350 km
 the order of a daytime mid-latitude F2 layer at moderate solar activity (IRI climatology,
 Bilitza et al. 2017) with a topside scale height chosen so that N_e(1000 km) ~ 6e10 m^-3.
 No local-time, latitude or solar-cycle dependence: a documented stand-in, not an ionosphere
-model.  (PyIRI 0.1.7 installs offline with its coefficients, but it was not wired in this session.)
+model.  (PyIRI 0.1.7 installs offline with its coefficients; it is not wired in yet.)
 """
 
 from __future__ import annotations

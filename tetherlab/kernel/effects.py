@@ -26,7 +26,7 @@ from ..forces import applied_force, central_gravity, uniform_gravity
 from ..forces import stiefel_moon  # Stiefel-Scheifele analytic Moon, code 30
 from ..forces import third_body, zonal  # gravity family, codes 10-13
 from ..forces import drag, electrodynamic  # codes 20-29
-from ..forces import oml  # code 22: OML bare-tether current (issue 13)
+from ..forces import oml  # code 22: OML bare-tether current (docs/effects-oml.md)
 from .layout import (
     ET_CODE,
     ET_OFF_PAR,

@@ -1,8 +1,8 @@
-"""Oracles: independent code paths that check the TMED simulator (issue 4).
+"""Oracles: independent code paths that check the TMED simulator.
 
 ``bead``: the lumped-mass tether model with its own right-hand side; ``bead_scene``: its initial
 state from a scene; ``continuum``: closed-form and ODE references for a continuous tether.
-Rigid bodies (issue 10, docs/rigid-oracles.md): ``torque_free`` (closed-form torque-free
+Rigid bodies (docs/rigid-oracles.md): ``torque_free`` (closed-form torque-free
 asymmetric body, Jacobi elliptic functions), ``gg_attitude`` (gravity-gradient libration
 frequencies and a nonlinear attitude integration), ``spinning_spokes`` (steady hub-and-spoke
 tethers in free space), ``wheel_exchange`` (momentum exchange with wheels).

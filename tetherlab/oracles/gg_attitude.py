@@ -1,6 +1,6 @@
 """Gravity-gradient attitude libration of a rigid satellite on a circular orbit.
 
-An oracle for tetherlab's rigid bodies in orbit (issue 10, oracle 2).  numpy and scipy only.
+An oracle for tetherlab's rigid bodies in orbit.  numpy and scipy only.
 Derivation: docs/rigid-oracles.md, section 2.
 
 Orbit frame (LVLH, as docs/scenes.md; Hughes 1986 ch. 8-9; Wie 2008, gravity-gradient stabilization):

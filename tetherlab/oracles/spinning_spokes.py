@@ -1,6 +1,6 @@
 """Hub and spoke in free space: the steady state of N identical tethers spinning on a free hub.
 
-An oracle for tetherlab's hub-and-spoke (issue 10, oracle 4; paper section 2.4).  numpy and scipy
+An oracle for tetherlab's hub-and-spoke (paper section 2.4).  numpy and scipy
 only.  Derivation: docs/rigid-oracles.md, section 3.
 
 Each tether is a continuous elastic string of unstretched length L, mass rho per unstretched

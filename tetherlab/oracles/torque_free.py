@@ -1,6 +1,6 @@
 """Torque-free asymmetric rigid body (Euler-Poinsot motion): closed-form rates and attitude.
 
-An oracle for tetherlab's rigid bodies (issue 10, oracle 1).  numpy and scipy only: no tetherlab
+An oracle for tetherlab's rigid bodies.  numpy and scipy only: no tetherlab
 simulator code.  Derivation, sign choices and sources: docs/rigid-oracles.md, section 1.
 
 Body axes are principal, with moments I1 < I2 < I3 (distinct; the axis-symmetric top is not

@@ -1,6 +1,6 @@
 """Momentum exchange between a rigid body and its momentum wheels.
 
-An oracle for tetherlab's wheels (issue 10, oracle 3).  numpy and scipy only.
+An oracle for tetherlab's wheels.  numpy and scipy only.
 Derivation: docs/rigid-oracles.md, section 4.
 
 Quantities are physical and convention-free: J_s the inertia of the whole body with its wheels
