@@ -5,7 +5,7 @@ mass is solved on the compiled model (tetherlab.statics) and compared with the a
 catenary of references/catenary/reference.json (built by references/catenary/build_reference.py,
 no tetherlab code):
 
-* shape: the largest distance of the joints from the analytic curve (the brief's measure; the two
+* shape: the largest distance of the joints from the analytic curve (the primary measure; the two
   end joints lie on it by construction, so n = 1 has zero error), the same over joints and rod
   centres, and the largest distance of joint k from the material point s_k = k L0 / n;
 * tension at both ends (|J_0|, |J_n| against T(0), T(L0)) and the largest error of the rods'

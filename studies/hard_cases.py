@@ -461,8 +461,8 @@ def report_md(rows, recs_by_case, control: dict | None = None, n512=None) -> str
            "2e-5 ... 4e-5 m from dop853 at 1e-12 at 300 s), so final positions at 300 s show no convergence in "
            "1e-9 ... 1e-11; at 200 s they converge at rate 2. The sensitivity is in the dynamics, not in the "
            "integration: a change of the initial angle by 1e-9 deg (7e-8 m at the tip) stays at 7e-8 ... 9e-8 m up "
-           "to 220 s and then grows to 1e-5 m at 300 s (e-folding about 12 s; dop853 at 1e-10, measured once by "
-           "the lead), the same growth as the differences between tolerances. The tether starts straight and "
+           "to 220 s and then grows to 1e-5 m at 300 s (e-folding about 12 s; dop853 at 1e-10, measured once "
+           "by hand), the same growth as the differences between tolerances. The tether starts straight and "
            "unstrained, so its tension is still building up (axial force 1e-5 ... 1.9 N against EA = 5e4 N at "
            "220 s): a nearly slack chain whose lateral motion is strongly nonlinear.", ""]
     if n512 is not None:

@@ -43,7 +43,7 @@ from tetherlab.system import TetherSpec, build_model, center_of_mass, chain_stat
 from tetherlab.tether.chain import accelerations
 
 SQ3 = math.sqrt(3.0)
-MU = 3.986004418e14  # m^3/s^2, Earth (the value the brief and the paper's section 4.3 scenes use)
+MU = 3.986004418e14  # m^3/s^2, Earth (the scenes' "earth" preset, WGS 84: tetherlab/scene.py)
 R0 = 7.4e6  # m, circular orbit of paper section 4.3
 OMEGA = math.sqrt(MU / R0**3)
 T_ORB = 2.0 * math.pi / OMEGA

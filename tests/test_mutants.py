@@ -31,7 +31,7 @@ GATES = tomllib.loads((ROOT / "references" / "gates.toml").read_text())
 def test_no_shipped_scene_reaches_a_defect(scene):
     try:
         sc = load_scene(ROOT / "studies" / "scenes" / scene)
-    except Exception as exc:  # a scene this branch cannot load is another test's business
+    except Exception as exc:  # a scene that cannot load is another test's business
         pytest.skip(f"{scene}: {exc}")
     p = prepare(sc).model.fresh_params()
     assert p[L.H_MUTANT] == L.MUT_NONE
