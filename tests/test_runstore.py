@@ -294,7 +294,7 @@ def test_huge_output_count_is_refused_naming_the_key(monkeypatch):
     _machine(monkeypatch, 16.0)
     calls = _interrupt_on_call(monkeypatch, 10**9)
     scene = load_scene(SCENES / "libration-inplane.toml").replace(**{"output.count": 200_000_000})
-    # the output buffer alone: 2e8 rows x 18 floats x 8 B = 26.8 GiB > 16 GiB (numpy's figure when it failed)
+    # the output buffer alone: 2e8 rows x 18 floats x 8 B = 26.8 GiB > 16 GiB available
     with pytest.raises(SceneError) as info:
         simulate(scene, progress=False)
     assert info.value.key == "output.count"
@@ -306,7 +306,7 @@ def test_huge_output_count_is_refused_naming_the_key(monkeypatch):
 def test_huge_rod_count_is_refused_naming_the_tether(monkeypatch):
     _machine(monkeypatch, 4.0)
     scene = load_scene(SCENES / "libration-inplane.toml").replace(**{"tethers.main.rods": 200_000})
-    # 1001 rows x 6 (1 + 2e5) floats x 8 B = 8.95 GiB of output buffer > 4 GiB (numpy's figure too)
+    # 1001 rows x 6 (1 + 2e5) floats x 8 B = 8.95 GiB of output buffer > 4 GiB available
     with pytest.raises(SceneError) as info:
         simulate(scene, progress=False)
     assert info.value.key == "tethers.main.rods" and "rods = 200000" in str(info.value)
