@@ -32,6 +32,8 @@ import numpy as np
 
 from .errors import SceneError
 from .forces import EFFECTS
+from .model import topology
+from .model.topology import LayoutStep
 from .orbits import kepler
 from .units import (
     ANGLE,
@@ -309,20 +311,6 @@ class EffectUse:
 
 
 @dataclass(frozen=True)
-class LayoutStep:
-    """One step of the initial layout: lay ``tether`` from its already placed end ``start``.
-
-    ``end`` is the body the step places (the tether's other end, put there by its initial
-    shape), or None when both ends are already placed and the tether starts straight between
-    them.
-    """
-
-    tether: str
-    start: str
-    end: str | None
-
-
-@dataclass(frozen=True)
 class Stop:
     """Conditions that end a run before its duration (each located as a terminal event)."""
 
@@ -345,6 +333,9 @@ class Scene:
     epoch: str | None = None  # ISO date, TDB
     stop: Stop | None = None
     source: str = field(default="<dict>", compare=False)  # file path, or "<dict>"
+    # the graph of bodies and tethers (tetherlab/model/topology.py), derived at load: not part of
+    # the scene's value (equality, to_dict) any more than its source is
+    graph: topology.Graph | None = field(default=None, compare=False, repr=False)
 
     # -- construction ---------------------------------------------------------------------
 
@@ -433,8 +424,13 @@ class Scene:
 
     def layout_plan(self) -> tuple[LayoutStep, ...]:
         """The order in which the initial layout places the bodies (see docs/scenes.md)."""
-        steps, _ = _layout(self.bodies, self.tethers, self.orbit)
-        return tuple(steps)
+        return self.graph_of().layout
+
+    def graph_of(self) -> topology.Graph:
+        """The scene's graph: the one built at load, or (a Scene made by hand) built now."""
+        if self.graph is not None:
+            return self.graph
+        return topology.build(self.bodies, self.tethers).with_layout(self.bodies, self.tethers, self.orbit)
 
 
 def load_scene(path: str | Path) -> Scene:
@@ -675,9 +671,11 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     )
     effects = _expand_per_body(effects, bodies)
     tethers = _parse_tethers(top.get("tethers", {}), bodies)
-    _check_forest(bodies, tethers)
+    graph = topology.build(bodies, tethers)
+    _check_forest(bodies, tethers, graph)
     orbit = _parse_orbit(top["orbit"], bodies, mu) if "orbit" in top else None
-    tethers = _check_layout(bodies, tethers, orbit, mu)
+    graph = graph.with_layout(bodies, tethers, orbit)
+    tethers = _check_layout(bodies, tethers, orbit, mu, graph)
 
     duration_s, duration_orbits = _parse_duration(_required(top, "duration", "", "a time (e.g. '6000 s') or 'N orbits'"))
     if duration_orbits is not None:
@@ -699,9 +697,12 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
         epoch=epoch,
         stop=stop,
         source=source,
+        graph=graph,
     )
     output = _parse_output(_required(top, "output", "", "a table with one of step, count, times"), scene.duration_seconds())
-    return dataclasses.replace(scene, output=output)
+    scene = dataclasses.replace(scene, output=output)
+    _check_run(scene)
+    return scene
 
 
 def _parse_epoch(value: Any) -> str:
@@ -1080,26 +1081,16 @@ def _parse_rigid(table: Mapping[str, Any], path: str, fixed: bool) -> Rigid | No
     return Rigid(inertia, attitude, omega, frame, wheels, control)
 
 
-def _check_forest(bodies: tuple[Body, ...], tethers: tuple["Tether", ...]) -> None:
-    """Bodies and tethers must form a forest: the tether that joins two bodies already joined
-    closes a loop (issue 10: loops are refused, naming that tether)."""
-    parent = {b.name: b.name for b in bodies}
-
-    def find(x):
-        while parent[x] != x:
-            parent[x] = parent[parent[x]]
-            x = parent[x]
-        return x
-
-    for t in tethers:
-        a, b = find(t.from_body), find(t.to_body)
-        if a == b:
-            raise SceneError(
-                f"tethers.{t.name}",
-                "tethers forming a tree (no closed loop: the elimination runs towards one root)",
-                f"tether {t.name!r} closes a loop between {t.from_body!r} and {t.to_body!r}",
-            )
-        parent[a] = b
+def _check_forest(bodies: tuple[Body, ...], tethers: tuple["Tether", ...], graph: topology.Graph) -> None:
+    """Bodies and tethers must form a forest: the graph's first cut tether (it joins two bodies
+    already joined) closes a loop, refused naming it; attachment points only on rigid bodies."""
+    if graph.cut:
+        t = graph.cut[0]
+        raise SceneError(
+            f"tethers.{t.name}",
+            "tethers forming a tree (no closed loop: the elimination runs towards one root)",
+            f"tether {t.name!r} closes a loop between {t.from_body!r} and {t.to_body!r}",
+        )
     by_name = {b.name: b for b in bodies}
     for t in tethers:
         for end, key in ((t.from_body, "from_point"), (t.to_body, "to_point")):
@@ -1317,44 +1308,7 @@ def _period_of_state(mu: float, r: np.ndarray, v: np.ndarray) -> float:
     return kepler.period(mu, -mu / (2.0 * energy))
 
 
-def _layout(bodies, tethers, orbit) -> tuple[list[LayoutStep], list[str]]:
-    """Layout order and the bodies it cannot place.
-
-    Start from the placed bodies (every body without [orbit]; with a body reference, it and the
-    bodies with explicit states; with the centre of mass, the first body, the whole layout being
-    shifted afterwards to put the centre of mass on the orbit).  Sweep the tethers in file order,
-    laying each that has exactly one placed end, until nothing changes; the tethers left with both
-    ends placed close loops and start straight between their ends.
-    """
-    if orbit is None:
-        placed = {b.name for b in bodies}
-    elif orbit.reference == CENTER_OF_MASS:
-        placed = {bodies[0].name}
-    else:
-        placed = {orbit.reference} | {b.name for b in bodies if b.has_state}
-    steps: list[LayoutStep] = []
-    laid: set[str] = set()
-    progress = True
-    while progress:
-        progress = False
-        for t in tethers:
-            if t.name in laid:
-                continue
-            if (t.from_body in placed) != (t.to_body in placed):
-                start, end = (t.from_body, t.to_body) if t.from_body in placed else (t.to_body, t.from_body)
-                steps.append(LayoutStep(t.name, start, end))
-                placed.add(end)
-                laid.add(t.name)
-                progress = True
-    steps.extend(
-        LayoutStep(t.name, t.from_body, None)
-        for t in tethers
-        if t.name not in laid and t.from_body in placed and t.to_body in placed
-    )
-    return steps, [b.name for b in bodies if b.name not in placed]
-
-
-def _check_layout(bodies, tethers, orbit, mu) -> tuple[Tether, ...]:
+def _check_layout(bodies, tethers, orbit, mu, graph: topology.Graph) -> tuple[Tether, ...]:
     """Check that every body can be placed; fill or forbid each tether's initial shape."""
     if orbit is None:
         if not any(b.has_state for b in bodies):
@@ -1372,7 +1326,7 @@ def _check_layout(bodies, tethers, orbit, mu) -> tuple[Tether, ...]:
                     hint="without an [orbit] table every body needs its own state; add [orbit] to "
                     "place it from the tether shapes",
                 )
-    steps, unplaced = _layout(bodies, tethers, orbit)
+    steps, unplaced = graph.layout, graph.unplaced
     if unplaced:
         raise SceneError(
             f"bodies.{unplaced[0]}",
@@ -1407,6 +1361,85 @@ def _check_layout(bodies, tethers, orbit, mu) -> tuple[Tether, ...]:
             t = dataclasses.replace(t, initial=InitialShape())
         result.append(t)
     return tuple(result)
+
+
+def _check_run(scene: Scene) -> None:
+    """The checks that need the whole scene and its graph: what the kernel, the initial layout and
+    the integrators can run (they were made when a run was prepared; they are scene content).
+
+    Checks that stay where the run is prepared, and why:
+
+    * the statics solve of shape 'equilibrium' (tetherlab/initial/statics.py) and the Newton
+      solves of orbit.motion 'equilibrium' and 'quasi-static' (tetherlab/initial/equilibrium.py):
+      whether they converge is known only by solving them on the built model;
+    * a rigid body's attitude relative to an undefined orbit frame (r x v = 0) and a tether
+      straight between two attachment points at the same place (tetherlab/initial/forest.py):
+      they need the laid-out positions and attitudes;
+    * stop.altitude above the root body's start, and "N orbits" of a reference that is not on a
+      closed orbit (pipeline.prepare): they need the laid-out initial state (the [orbit] itself is
+      checked at load, in _check_orbits_duration);
+    * the formulation (pipeline._formulation) and what follows from it (integrator.method 'abm',
+      integrator.time_element): the formulation layer resolves them from the built model;
+    * a star of point masses with a tether between two placed ends whose far end is placed by the
+      [orbit] rather than by its own state (tetherlab/initial/star.py): the star layout cannot lay
+      it, yet such a scene is a valid scene (it loads, round-trips and may be edited into a
+      runnable one), so it is refused when it is laid out;
+    * the memory and disk a run needs (tetherlab/resources.py): a property of the machine;
+    * per-effect checks made when an effect packs its parameters against the kernel bodies
+      (tetherlab/forces/).
+    """
+    graph = scene.graph
+    for c, fixed in enumerate(graph.fixed):
+        if len(fixed) > 1:
+            raise SceneError(
+                f"bodies.{fixed[1]}.fixed", "at most one fixed body in a group of bodies joined by tethers "
+                "(the kernel holds only the root of a tree at rest)", f"true on {list(fixed)}",
+            )  # fmt: skip
+    tethers = scene.tethers
+    nq = tethers[0].quadrature if tethers else 2
+    if any(t.quadrature != nq for t in tethers):
+        raise SceneError(
+            "tethers.*.quadrature", "the same quadrature for every tether", str([t.quadrature for t in tethers])
+        )
+    by_name = {b.name: b for b in scene.bodies}
+    mu = scene.central_body.mu_m3_s2
+    orbit = scene.orbit
+    if not graph.simple:
+        if orbit is not None and orbit.motion in ("equilibrium", "quasi-static"):
+            raise SceneError("orbit.motion", "'corotating' or 'translating' for a scene with rigid bodies or a tree other "
+                             "than a star (the relative-equilibrium solve handles stars of point masses)", repr(orbit.motion))  # fmt: skip
+        for k in graph.placement_order:
+            t = tethers[k]
+            if t.initial is not None and t.initial.shape == EQUILIBRIUM:
+                raise SceneError(f"tethers.{t.name}.initial.shape", "'straight' or 'rods' in a tree other than a star of "
+                                 "point masses (the statics solve handles one tether on a fixed root)", "'equilibrium'")  # fmt: skip
+    if any(t.initial is not None and t.initial.shape == EQUILIBRIUM for t in tethers):
+        root = by_name[graph.roots[0]]
+        t = tethers[0]
+        if not root.fixed:
+            raise SceneError(
+                f"bodies.{root.name}.fixed", "true: shape 'equilibrium' holds the tether between a fixed root and its end mass",
+                "false",
+            )  # fmt: skip
+        if len(tethers) != 1:
+            raise SceneError(f"tethers.{t.name}.initial.shape", "'equilibrium' only in a scene with a single tether",
+                             f"{len(tethers)} tethers")  # fmt: skip
+        tip = by_name[t.to_body].state(mu)
+        if tip is not None and np.any(tip[1] != 0.0):
+            raise SceneError(
+                f"bodies.{t.to_body}.velocity", "[0, 0, 0] m/s: a static equilibrium starts at rest", str(tip[1].tolist())
+            )
+    # events (kernel/events.py::event_components): the stop altitude and every rod of a
+    # tension-only tether
+    events = (["stop"] if scene.stop is not None and scene.stop.altitude_m is not None else []) + (
+        ["slack"] if any(t.tension_only for t in tethers) else []
+    )
+    if events and scene.integrator.method.startswith("scipy:"):
+        raise SceneError(
+            "integrator.method", "a native method (dop853 or radau5): this scene has events "
+            f"({', '.join(sorted(events))}) that only they locate",
+            repr(scene.integrator.method),
+        )  # fmt: skip
 
 
 def _check_end_distance(t: Tether, distance: float, path: str) -> None:
