@@ -181,7 +181,7 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
                 f"{scene.stop.altitude_m:.6g} m",
             )
     model.p[H_EV_STOP_R] = stop_radius
-    # (a scipy method with events is refused at load: scene._check_run)
+    # (a scipy method with events is refused at load: tetherlab/scene/checks.py)
     event_names, event_terminal = event_components(model, stop_radius)
 
     # reference orbit: radius and Keplerian period (for "N orbits" and the tolerance scales)

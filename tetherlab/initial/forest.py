@@ -99,9 +99,9 @@ def _shape_vectors(scene, t, r_ref, v_ref):
 def forest_state(scene, graph, model: Model, mu: float):
     """(y0, r_ref, v_ref, sides) for any forest (see the module docstring).
 
-    Checked at load (scene._check_run, _check_layout): orbit.motion is 'corotating' or
-    'translating', no tether has shape 'equilibrium', every component holds the orbit reference
-    or a body with an explicit state."""
+    Checked at load (tetherlab/scene/checks.py: _check_run, _check_layout): orbit.motion is
+    'corotating' or 'translating', no tether has shape 'equilibrium', every component holds the
+    orbit reference or a body with an explicit state."""
     by_name = {b.name: b for b in scene.bodies}
     kindex = {b.name: i for i, b in enumerate(model.bodies) if b.name}
     orbit = scene.orbit

@@ -37,7 +37,7 @@ def star_state(scene, graph, model: Model, mu: float, eq_model: Model | None = N
     tether laid from its shape with the root at the origin, then the reference point moved onto
     its orbit, and for orbit.motion 'equilibrium'/'quasi-static' the rods solved for a rigid
     rotation (tetherlab/initial/equilibrium.py).  The scene checks at load guarantee an [orbit]
-    or a root state (scene._check_layout).
+    or a root state (tetherlab/scene/checks.py, _check_layout).
     """
     from ..diagnostics import direction_from_angles
 

@@ -13,7 +13,7 @@ def static_start(scene, root, tethers, specs, effects, central, nq, y0):
     """Initial state of a tether that starts in static equilibrium between its placed ends.
 
     The root is fixed, the tether the only one and the end mass placed at rest (checked at load:
-    scene._check_run); tetherlab.statics solves for the rods and for the holding force R_f
+    tetherlab/scene/checks.py); tetherlab.statics solves for the rods and for the holding force R_f
     (docs/catenary.md).  Returns (y0, R_f).  A solve that fails is refused here: only solving
     tells.
     """

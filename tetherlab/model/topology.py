@@ -6,7 +6,7 @@ its connected component) plus the tethers left out of the forest because they jo
 already joined (``cut``: each closes a loop).  Everything the other layers need about the shape of
 the system is read from it:
 
-* the scene checks (tetherlab/scene.py): loops (a cut tether), one fixed body per component, the
+* the scene checks (tetherlab/scene/checks.py): loops (a cut tether), one fixed body per component, the
   layout plan and the bodies it cannot place;
 * the kernel (tetherlab/system.py, build_model): the body order, each tether's parent and child
   and the elimination order (leaves first);
@@ -176,7 +176,8 @@ def build(bodies, tethers) -> Graph:
     for c, group in enumerate(members):
         fx = tuple(b.name for b in bodies if comp[b.name] == c and b.fixed)
         first = next((t for t in tethers if comp[t.from_body] == c), None)
-        roots.append(fx[0] if fx else (first.from_body if first is not None else next(n for n in names if comp[n] == c)))
+        alone = next(n for n in names if comp[n] == c)
+        roots.append(fx[0] if fx else (first.from_body if first is not None else alone))
         fixed.append(fx)
     # orient every forest tether away from its component's root (unique in a tree)
     parent = [None] * len(forest)
@@ -200,7 +201,9 @@ def build(bodies, tethers) -> Graph:
     depth, order = depths_and_order(len(kernel), parent_index)
     children = {n: tuple(k for k in range(len(forest)) if parent[k] == n) for n in names}
     rigid = any(b.rigid is not None for b in bodies)
-    simple = len(roots) == 1 and not any(t.reversed for t in oriented) and all(p == roots[0] for p in parent) and not rigid
+    simple = (
+        len(roots) == 1 and not any(t.reversed for t in oriented) and all(p == roots[0] for p in parent) and not rigid
+    )
     return Graph(
         bodies=tuple(names),
         tethers=oriented,
