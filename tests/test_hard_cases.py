@@ -148,7 +148,7 @@ def test_collapse_must_be_a_clear_repeatable_error(hc, scene):
 
 
 # -- part 5: n = 512 over an orbit (docs/verification.md section 5) -----------------------------
-MU_EARTH = 3.986004418e14  # the "earth" preset of tetherlab/scene.py
+MU_EARTH = 3.986004418e14  # the "earth" preset of tetherlab/scene/data.py
 
 
 @pytest.fixture(scope="module")

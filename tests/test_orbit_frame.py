@@ -15,7 +15,7 @@ from tetherlab.pipeline import integrate_prepared, prepare
 from .helpers import SCENES, call_cfunc
 
 DEORBIT = SCENES / "deorbit-ed.toml"
-R_EARTH_M = 6378.137e3  # the scene preset "earth" (tetherlab/scene.py)
+R_EARTH_M = 6378.137e3  # the scene preset "earth" (tetherlab/scene/data.py)
 
 
 def _deorbit(**kv):

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import diagnostics as diag
+from . import initial
 from .errors import SceneError
 from .forces import effect as effect_spec
 from .formulations.cowell import cowell_rhs
@@ -28,7 +29,6 @@ from .kernel.layout import (
     H_FAIL_T,
     H_FAIL_VAL,
 )
-from .orbits.kepler import elements_to_cartesian
 from .result import Result
 from .system import (
     BodySpec,
@@ -38,8 +38,6 @@ from .system import (
     TetherSpec,
     WheelSpec,
     build_model,
-    center_of_mass,
-    chain_state,
     tolerance_scales,
 )
 
@@ -77,106 +75,6 @@ class Prepared:
     time_element: str = "none"  # DROMO sigma form: "none" (tau) or "linear" (scene.IntegratorSpec)
 
 
-def _state_of(entity, mu: float):
-    """(r, v) of a body or orbit block with position/velocity or elements, else None."""
-    if getattr(entity, "elements", None) is not None:
-        el = entity.elements
-        r, v = elements_to_cartesian(mu, el.a_m, el.e, el.i_rad, el.raan_rad, el.argp_rad, el.nu_rad)
-        return np.asarray(r, float), np.asarray(v, float)
-    if getattr(entity, "position_m", None) is not None:
-        v = entity.velocity_m_s if entity.velocity_m_s is not None else (0.0, 0.0, 0.0)
-        return np.asarray(entity.position_m, float), np.asarray(v, float)
-    return None
-
-
-@dataclass
-class Topology:
-    """The scene's graph as the kernel runs it (docs/scenes.md, "Body order in the kernel").
-
-    ``bodies``: BodySpec in kernel order (0 the first root, 1 + k the child end of tether k, then
-    the other roots); ``parents[k]``/``children[k]``: the body names at tether k's root side and
-    far end; ``reversed[k]``: the scene writes tether k child -> parent.  ``simple``: a star of
-    point masses around body 0 written from it (the original layout code applies, bit for bit).
-    """
-
-    bodies: list
-    tethers: list
-    parents: list
-    children: list
-    reversed: list
-    roots: list
-    simple: bool
-
-
-def _topology(scene) -> Topology:
-    """The forest of the scene (validated at load: no loops, attachments on rigid bodies only).
-
-    The root of each connected component is its fixed body, else the `from` body of its first
-    tether in file order, else (no tether) the body itself.  Tethers keep file order; each is
-    oriented from its root side (reversed when the scene writes it the other way)."""
-    names = [b.name for b in scene.bodies]
-    tethers = list(scene.tethers)
-    adj: dict[str, list] = {n: [] for n in names}
-    for k, t in enumerate(tethers):
-        adj[t.from_body].append((k, t.to_body))
-        adj[t.to_body].append((k, t.from_body))
-    comp: dict[str, int] = {}
-    members: list[list[str]] = []
-    for n in names:
-        if n in comp:
-            continue
-        stack = [n]
-        comp[n] = len(members)
-        group = []
-        while stack:
-            x = stack.pop()
-            group.append(x)
-            for _, y in adj[x]:
-                if y not in comp:
-                    comp[y] = comp[n]
-                    stack.append(y)
-        members.append(group)
-    roots = []
-    for c, group in enumerate(members):
-        fixed = [b.name for b in scene.bodies if b.name in group and b.fixed]
-        if len(fixed) > 1:
-            raise SceneError(
-                f"bodies.{fixed[1]}.fixed", "at most one fixed body in a group of bodies joined by tethers "
-                "(the kernel holds only the root of a tree at rest)", f"true on {fixed}",
-            )
-        first = next((t for t in tethers if t.from_body in group), None)
-        root = fixed[0] if fixed else (first.from_body if first is not None else next(n for n in names if n in group))
-        roots.append(root)
-    # orient every tether away from its component's root
-    parents = [None] * len(tethers)
-    children = [None] * len(tethers)
-    for root in roots:
-        stack = [root]
-        seen = {root}
-        while stack:
-            x = stack.pop()
-            for k, y in adj[x]:
-                if y in seen:
-                    continue
-                seen.add(y)
-                parents[k] = x
-                children[k] = y
-                stack.append(y)
-    rev = [parents[k] != t.from_body for k, t in enumerate(tethers)]
-    by_name = {b.name: b for b in scene.bodies}
-    root0 = roots[comp[names[0]]] if tethers or len(names) == 1 else roots[comp[names[0]]]
-    other_roots = [r for r in roots if r != root0]
-    order = [root0] + list(children) + other_roots
-    bodies = [_body_spec(by_name[n]) for n in order]
-    simple = (
-        not other_roots
-        and not any(rev)
-        and all(parents[k] == root0 for k in range(len(tethers)))
-        and all(b.rigid is None for b in scene.bodies)
-    )
-    return Topology(bodies, tethers, parents, children, rev, [root0] + other_roots, simple)
-
-
 def _body_spec(body) -> BodySpec:
     r = body.rigid
     if r is None:
@@ -210,10 +108,13 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
     mu = scene.central_body.mu_m3_s2
     central = {"mu_m3_s2": mu, "radius_m": scene.central_body.radius_m}
     effects = [(effect_spec(e.name), e.params_si) for e in scene.effects]
-    topo = _topology(scene)
-    root_name = topo.roots[0]
-    tethers = topo.tethers
+    # the scene's graph, built and checked at load (tetherlab/model/topology.py)
+    graph = scene.graph_of()
+    root_name = graph.roots[0]
+    tethers = list(scene.tethers)
     root = scene.body(root_name)
+    by_name = {b.name: b for b in scene.bodies}
+    kernel_bodies = [_body_spec(by_name[n]) for n in graph.kernel_bodies]
     zero = (0.0, 0.0, 0.0)
     specs = []
     for k, t in enumerate(tethers):
@@ -227,20 +128,16 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
             mass_kg=t.mass_kg,
             damping_n_s=t.damping_N_s,
             model=t.model,
-            tip_mass_kg=scene.body(topo.children[k]).mass_kg,
-            tip_name=topo.children[k],
+            tip_mass_kg=scene.body(graph.tethers[k].child).mass_kg,
+            tip_name=graph.tethers[k].child,
             tension_only=t.tension_only,
             diameter_m=t.diameter_m,
-            parent=topo.parents[k],
-            from_point_m=tuple(b_pt if topo.reversed[k] else a_pt),
-            to_point_m=tuple(a_pt if topo.reversed[k] else b_pt),
-            reversed=topo.reversed[k],
+            parent=graph.tethers[k].parent,
+            from_point_m=tuple(b_pt if graph.tethers[k].reversed else a_pt),
+            to_point_m=tuple(a_pt if graph.tethers[k].reversed else b_pt),
+            reversed=graph.tethers[k].reversed,
         ))  # fmt: skip
-    nq = tethers[0].quadrature if tethers else 2
-    if any(t.quadrature != nq for t in tethers):
-        raise SceneError(
-            "tethers.*.quadrature", "the same quadrature for every tether", str([t.quadrature for t in tethers])
-        )
+    nq = tethers[0].quadrature if tethers else 2  # one for every tether (checked at load)
     model = build_model(
         root_mass_kg=root.mass_kg,
         tethers=specs,
@@ -251,7 +148,8 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
         root_name=root_name,
         epoch=scene.epoch,
         duration_s=_duration_hint(scene),
-        bodies=topo.bodies,
+        bodies=kernel_bodies,
+        graph=graph,
     )
     # The relative equilibrium is a rigid rotation under the conservative effects; a velocity-
     # dependent or time-dependent force (electrodynamic, drag, third bodies) has none, so the
@@ -266,17 +164,13 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
             quadrature=nq,
             root_fixed=bool(getattr(root, "fixed", False)),
             root_name=root_name,
-            bodies=topo.bodies,
+            bodies=kernel_bodies,
+            graph=graph,
         )
-    if topo.simple:
-        y0, r_ref, v_ref, sides = _initial_state(scene, model, root_name, tethers, mu, eq_model)
-    else:
-        from .layout_forest import forest_state
-
-        y0, r_ref, v_ref, sides = forest_state(scene, model, topo, mu)
+    y0, r_ref, v_ref, sides = initial.initial_state(scene, graph, model, mu, eq_model)
     holding = None
     if any(t.initial is not None and t.initial.shape == "equilibrium" for t in tethers):
-        y0, holding = _static_start(scene, root, tethers, specs, effects, central, nq, y0)
+        y0, holding = initial.static_start(scene, root, tethers, specs, effects, central, nq, y0)
     stop_radius = 0.0
     if scene.stop is not None and scene.stop.altitude_m is not None:
         stop_radius = scene.central_body.radius_m + scene.stop.altitude_m
@@ -287,13 +181,8 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
                 f"{scene.stop.altitude_m:.6g} m",
             )
     model.p[H_EV_STOP_R] = stop_radius
+    # (a scipy method with events is refused at load: tetherlab/scene/checks.py)
     event_names, event_terminal = event_components(model, stop_radius)
-    if event_names and scene.integrator.method.startswith("scipy:"):
-        raise SceneError(
-            "integrator.method", "a native method (dop853 or radau5): this scene has events "
-            f"({', '.join(sorted({n.split('.')[0] for n in event_names}))}) that only they locate",
-            repr(scene.integrator.method),
-        )
 
     # reference orbit: radius and Keplerian period (for "N orbits" and the tolerance scales)
     rr = float(np.linalg.norm(r_ref))
@@ -364,39 +253,6 @@ def _event_args(prep) -> dict:
     return {"event": system_events, "n_events": len(prep.event_names), "terminal": prep.event_terminal}
 
 
-def _static_start(scene, root, tethers, specs, effects, central, nq, y0):
-    """Initial state of a tether that starts in static equilibrium between its placed ends.
-
-    The root must be fixed and the end mass placed at rest; tetherlab.statics solves for the
-    rods and for the holding force R_f (docs/catenary.md).  Returns (y0, R_f).
-    """
-    from .statics import held_model, solve
-
-    t = tethers[0]
-    path = f"tethers.{t.name}.initial.shape"
-    if not root.fixed:
-        raise SceneError(
-            f"bodies.{root.name}.fixed", "true: shape 'equilibrium' holds the tether between a fixed root and its end mass",
-            "false",
-        )
-    if len(tethers) != 1:
-        raise SceneError(path, "'equilibrium' only in a scene with a single tether", f"{len(tethers)} tethers")
-    tip_r, tip_v = _state_of(scene.body(t.to_body), scene.central_body.mu_m3_s2)
-    if np.any(tip_v != 0.0):
-        raise SceneError(
-            f"bodies.{t.to_body}.velocity", "[0, 0, 0] m/s: a static equilibrium starts at rest", str(tip_v.tolist())
-        )
-    r0 = y0[:3]
-    orbital = any(e.name == "central_gravity" for e in scene.effects) and np.linalg.norm(r0) > 0
-    down = -r0 / np.linalg.norm(r0) if orbital else np.array([0.0, 0.0, -1.0])  # for the first guess
-    held = held_model(specs[0], effects, central, quadrature=nq, root_name=root.name)
-    try:
-        eq = solve(held, r0, tip_r, down=down)
-    except ValueError as exc:
-        raise SceneError(path, "a tether with a static equilibrium between its placed ends", str(exc)) from None
-    return eq.y, eq.holding_force_N
-
-
 def _formulation(scene, model: Model, tethers, y0: np.ndarray, events: bool = False) -> str:
     """The formulation the integrator runs, checked against the scene (docs/dromo.md section 7)."""
     name = scene.integrator.formulation
@@ -461,231 +317,6 @@ def _output_times(output, duration: float) -> np.ndarray:
     if duration - t[-1] > 1e-9 * max(duration, 1.0):
         t = np.concatenate([t, [duration]])
     return t
-
-
-def _initial_state(scene, model: Model, root_name: str, tethers, mu: float, eq_model: Model | None = None):
-    from .diagnostics import direction_from_angles
-
-    root = scene.body(root_name)
-    root_state = _state_of(root, mu)
-    orbit = scene.orbit
-    sides = []
-    # 1. every tether whose both ends carry explicit states: a straight line between them
-    explicit_tips = [_state_of(scene.body(t.to_body), mu) for t in tethers]
-    if tethers and root_state is not None and all(s is not None for s in explicit_tips):
-        r0, v0 = root_state
-        dirs, strains = [], []
-        rod_vel = []
-        for t, (rt, vt) in zip(tethers, explicit_tips):
-            span = rt - r0
-            dist = float(np.linalg.norm(span))
-            dirs.append(np.tile(span / dist, (t.rods, 1)))
-            strains.append(dist / t.length_m - 1.0)
-            rod_vel.append((vt - v0) / (2 * math.sqrt(3) * t.rods))
-            sides.append(1.0)
-        y0 = chain_state(model, r0, v0, dirs, strains, None)
-        h = y0.size // 2
-        for k, sl in enumerate(model.rod_slices):
-            for g in range(sl.start, sl.stop):
-                y0[h + 3 + 3 * g : h + 6 + 3 * g] = rod_vel[k]
-        return y0, r0, v0, sides
-
-    # 2. the reference point's orbit: [orbit] block, or the root's own state
-    if orbit is not None:
-        ref = _state_of(orbit, mu)
-        reference = orbit.reference
-        motion = orbit.motion
-    elif root_state is not None:
-        ref = root_state
-        reference = root_name
-        motion = "corotating"
-    else:
-        raise SceneError("orbit", "an [orbit] block or an initial state on the root body", "neither")
-    r_ref, v_ref = ref
-    # (a reference point at the centre has no orbit to corotate with: no rotation)
-    rr2 = float(r_ref @ r_ref)
-    omega = np.cross(r_ref, v_ref) / rr2 if motion in ("corotating", "equilibrium", "quasi-static") and rr2 > 0 else None
-    dirs, strains = [], []
-    for t in tethers:
-        ini = t.initial
-        if ini is None:
-            raise SceneError(
-                f"tethers.{t.name}.initial", "an initial shape (only one end has an explicit state)", "none"
-            )
-        side = 1.0 if ini.side == "up" else -1.0
-        sides.append(side)
-        thetas, phis = ini.rod_angles_rad(t.rods)
-        dirs.append(np.array([direction_from_angles(r_ref, v_ref, th, ph, side) for th, ph in zip(thetas, phis)]))
-        strains.append(ini.strain)
-    # lay out with the root at the origin, then move the reference point onto its orbit
-    y0 = chain_state(model, np.zeros(3), np.zeros(3), dirs, strains, omega)
-    if reference == "center_of_mass":
-        c, _ = center_of_mass(model, y0)
-    elif reference == root_name:
-        c = np.zeros(3)
-    else:
-        k = [t.to_body for t in tethers].index(reference)
-        from .system import point_positions
-
-        c = point_positions(model, y0)["joints"][k][-1]
-    r0 = r_ref - c
-    v0 = v_ref + (np.cross(omega, r0 - r_ref) if omega is not None else 0.0)
-    h = y0.size // 2
-    y0[:3] = r0
-    y0[h : h + 3] = v0
-    if motion in ("equilibrium", "quasi-static"):
-        y0 = _relative_equilibrium(eq_model or model, y0, r_ref, v_ref, omega, reference, root_name, tethers)
-    if motion == "quasi-static":
-        y0 = _quasi_static(model, y0, r_ref, reference, root_name, tethers)
-    return y0, r_ref, v_ref, sides
-
-
-def _rigidly_rotating(model, y0, d, W, r_ref, reference, root_name, tethers):
-    """y0 with the rod vectors ``d`` (nrods x 3), the reference point at ``r_ref`` and every point
-    rotating rigidly with ``W`` about the centre of the central body."""
-    h = y0.size // 2
-    y = y0.copy()
-    y[3:h] = d.ravel()
-    if reference == "center_of_mass":
-        y[:3] = 0.0
-        c, _ = center_of_mass(model, y)
-    elif reference == root_name:
-        c = np.zeros(3)
-    else:
-        from .system import point_positions
-
-        y[:3] = 0.0
-        k = [t.to_body for t in tethers].index(reference)
-        c = point_positions(model, y)["joints"][k][-1]
-    y[:3] = r_ref - c if reference != root_name else r_ref
-    y[h : h + 3] = np.cross(W, y[:3])
-    y[h + 3 :] = np.cross(W, d).ravel()
-    return y
-
-
-def _quasi_static(model, y0, r_ref, reference, root_name, tethers):
-    """The rigidly rotating configuration under every effect of the scene at t = 0 (docs/model.md,
-    section 8.1; ``orbit.motion = "quasi-static"``).
-
-    Starts from the relative equilibrium ``y0`` of the conservative effects (spin rate W kept) and
-    solves all three components of every rod vector d_g so that, in the frame rotating with W, every
-    rod's relative acceleration d''_g - W x (W x d_g) vanishes: the tether takes the bowed and tilted
-    shape the non-conservative forces (electrodynamic, drag) hold it in at t = 0.  Those forces
-    vary along the orbit at the orbital frequency, far below the tether's lateral modes, so from
-    this start the lateral modes are hardly excited; from the straight start they ring undamped for
-    the whole run (the de-orbit: docs/integrators.md, section 11).  The centre of mass still
-    decelerates: only the relative motion is in equilibrium.  Newton with a finite-difference
-    Jacobian (3 n unknowns; set-up cost only).
-    """
-    from .formulations.cowell import cowell_rhs_py
-
-    nrods = model.n_rods
-    h = y0.size // 2
-    r0 = y0[:3]
-    W = np.cross(r0, y0[h : h + 3]) / float(r0 @ r0)  # the rigid rotation of the equilibrium
-    w2 = float(W @ W)
-    d0 = y0[3:h].reshape(nrods, 3)
-    size = 2 * math.sqrt(3) * float(np.linalg.norm(d0, axis=1).sum())
-    dscale = float(np.max(np.linalg.norm(d0, axis=1)))
-
-    def residual(x):
-        d = x.reshape(nrods, 3)
-        y = _rigidly_rotating(model, y0, d, W, r_ref, reference, root_name, tethers)
-        acc = cowell_rhs_py(model, y)[h + 3 :].reshape(nrods, 3)
-        return (acc - np.cross(W, np.cross(W, d))).ravel() / (w2 * size)
-
-    x = d0.ravel().copy()
-    f = residual(x)
-    step_max = np.inf
-    for _ in range(30):
-        J = np.empty((x.size, x.size))
-        for j in range(x.size):
-            dx = 1e-7 * max(1.0, abs(x[j]))
-            xp = x.copy()
-            xp[j] += dx
-            J[:, j] = (residual(xp) - f) / dx
-        step = np.linalg.lstsq(J, f, rcond=None)[0]
-        x = x - step
-        f = residual(x)
-        step_max = float(np.max(np.abs(step)))
-        # The rod vectors to 1e-10 of their length: the residual has a round-off floor (orbital
-        # accelerations of ~8 m/s^2 against tidal ones of ~1e-3 m/s^2), the step does not.
-        if step_max < 1e-10 * dscale:
-            break
-    if not step_max < 1e-10 * dscale:
-        raise SceneError(
-            "orbit.motion", "a configuration with a quasi-static equilibrium under every effect (Newton converging)",
-            f"last Newton step {step_max:.3g} m on rod vectors of {dscale:.3g} m after 30 iterations",
-        )
-    return _rigidly_rotating(model, y0, x.reshape(nrods, 3), W, r_ref, reference, root_name, tethers)
-
-
-def _relative_equilibrium(model, y0, r_ref, v_ref, omega, reference, root_name, tethers):
-    """Rod lengths and spin rate that make the laid-out system rotate rigidly (docs/model.md 8).
-
-    Unknowns: one length factor per rod and the spin rate Omega (about the orbit normal).
-    Equations: in the frame rotating with Omega, the axial component of every rod's relative
-    acceleration d'' - Omega x (Omega x d) and the radial component of the root's vanish.  For a
-    tether along the local vertical this is the exact relative equilibrium of paper section 4.3
-    (the tether stays vertical and the rods do not breathe); for a tilted tether it removes the
-    axial transient and leaves the libration.  The reference point is kept on its orbit.
-    """
-    from .formulations.cowell import cowell_rhs_py
-
-    nrods = model.n_rods
-    h = y0.size // 2
-    zhat = omega / np.linalg.norm(omega)
-    w0 = float(np.linalg.norm(omega))
-    d0 = y0[3:h].reshape(nrods, 3).copy()
-    size = 2 * math.sqrt(3) * float(np.linalg.norm(d0, axis=1).sum())  # whole tether length
-
-    def build(x):
-        W = x[-1] * w0 * zhat
-        return _rigidly_rotating(model, y0, d0 * x[:-1, None], W, r_ref, reference, root_name, tethers), W
-
-    def residual(x):
-        y, W = build(x)
-        dy = cowell_rhs_py(model, y)
-        acc = dy[h:]
-        r0 = y[:3]
-        d = y[3:h].reshape(nrods, 3)
-        res = np.empty(nrods + 1)
-        a_rel0 = acc[:3] - np.cross(W, np.cross(W, r0))
-        res[0] = a_rel0 @ r0 / np.linalg.norm(r0) / (w0 * w0 * np.linalg.norm(r0))
-        # every rod at once (a Python loop of per-rod cross products made this solve O(n^2) in
-        # interpreter calls: 12 s at n = 256)
-        u = d / np.linalg.norm(d, axis=1)[:, None]
-        a_rel = acc[3:].reshape(nrods, 3) - np.cross(W, np.cross(W, d))
-        res[1:] = (a_rel * u).sum(axis=1) / (w0 * w0 * size)
-        return res
-
-    # Newton with a finite-difference Jacobian; the residuals are relative accelerations in units
-    # of Omega^2 * size, whose round-off floor is ~1e-12 (8 m/s^2 gravity against ~1e-3 m/s^2
-    # tidal terms), so convergence is judged on the step, not on the residual alone.
-    x = np.ones(nrods + 1)
-    f = residual(x)
-    for _ in range(40):
-        J = np.empty((nrods + 1, nrods + 1))
-        for j in range(nrods + 1):
-            dx = 1e-6 * max(1.0, abs(x[j]))
-            xp = x.copy()
-            xp[j] += dx
-            J[:, j] = (residual(xp) - f) / dx
-        step = np.linalg.solve(J, f)
-        x = x - step
-        f = residual(x)
-        if np.max(np.abs(step)) < 1e-14 or np.max(np.abs(f)) < 1e-12:
-            break
-    # Converged when the solution is known to 1e-11 in the unknowns (rod length factors ~ strain,
-    # spin rate relative): the residual alone has a scene-dependent round-off floor (1.4e-9
-    # measured on the de-orbit tether, i.e. a strain error of ~4e-12).
-    x_err = float(np.max(np.abs(np.linalg.solve(J, f))))
-    if not x_err < 1e-11:
-        raise SceneError(
-            "orbit.motion", "a configuration with a relative equilibrium (Newton converging)",
-            f"residual {np.max(np.abs(f)):.3g} (error in the unknowns ~{x_err:.2g}) after 40 iterations",
-        )
-    return build(x)[0]
 
 
 def _failing_effect(p: np.ndarray, code: int) -> str:

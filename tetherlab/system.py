@@ -13,6 +13,7 @@ import numpy as np
 
 from .forces.registry import EffectSpec
 from .kernel import layout as L
+from .model import topology
 
 SQ3 = np.sqrt(3.0)
 
@@ -174,6 +175,7 @@ def build_model(
     duration_s: float | None = None,
     bodies: list[BodySpec] | None = None,
     defect: int = L.DEFECT_NONE,
+    graph=None,
 ) -> Model:
     """Pack the parameter block.  Inputs are SI floats that the scene layer has validated.
 
@@ -184,6 +186,8 @@ def build_model(
     of tether k, then the other roots); each tether's ``parent`` names its root-side body.
     Without it: the star of the original API (a root named ``root_name`` carrying every tether,
     tips of ``tip_mass_kg``; a tip mass of 0 is a free end).  ``defect``: negative controls only.
+    ``graph``: the scene's graph (tetherlab/model/topology.py) the bodies were ordered by, whose
+    elimination order the kernel runs; without it, the same order derived from the parents.
     """
     nteth = len(tethers)
     nrods = sum(t.rods for t in tethers)
@@ -320,13 +324,12 @@ def build_model(
     p[offs["quad"] : offs["quad"] + 2 * quadrature] = nodes
     p[offs["quad"] + 2 * quadrature : offs["quad"] + 4 * quadrature] = weights
 
-    # bodies: parents, depths (tether order leaves first), attitude and wheel blocks
+    # bodies: parents, elimination order (leaves first), attitude and wheel blocks
     parent_tether = {1 + k: k for k in range(nteth)}
-    depth = [0] * nbody
-    for _ in range(nteth + 1):  # depths by relaxation (trees are validated by the scene layer)
-        for k, t in enumerate(tethers):
-            depth[1 + k] = depth[index[t.parent]] + 1
-    order = sorted(range(nteth), key=lambda k: (-depth[1 + k], k))
+    if graph is not None:
+        order = list(graph.elimination_order)
+    else:
+        _, order = topology.depths_and_order(nbody, [index[t.parent] for t in tethers])
     p[offs["order"] : offs["order"] + nteth] = order
     rigid_index = {}
     wheel_index = {}

@@ -46,7 +46,7 @@ ss = _load("spinning_spokes")
 we = _load("wheel_exchange")
 fit = _load("continuum").fit_frequencies
 
-MU_EARTH = 3.986004418e14  # the "earth" preset of tetherlab/scene.py (WGS 84 / IERS 2010 GM)
+MU_EARTH = 3.986004418e14  # the "earth" preset of tetherlab/scene/data.py (WGS 84 / IERS 2010 GM)
 
 # -- cases (our choices; docs/rigid-oracles.md section 5 says why) --------------------------------
 TORQUE_FREE = {

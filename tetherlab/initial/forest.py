@@ -1,5 +1,6 @@
-"""Initial state of a forest of bodies and tethers (issue 10): any tree, tethers written in either
-direction, rigid bodies with attachment points, bodies without tethers.
+"""Initial state of a forest of bodies and tethers: any tree, tethers written in either direction,
+rigid bodies with attachment points, bodies without tethers (the scene's graph says which body is
+each tether's parent, the roots and components).
 
 The rules (docs/scenes.md, "Initial layout" and "Body order in the kernel"):
 
@@ -20,12 +21,10 @@ The rules (docs/scenes.md, "Initial layout" and "Body order in the kernel"):
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from .errors import SceneError
-from .system import SQ3, Model, attitude_block, center_of_mass
+from ..errors import SceneError
+from ..system import SQ3, Model, attitude_block, center_of_mass
 
 _PASSES = 3
 
@@ -87,27 +86,28 @@ def body_attitude(body, r, v) -> tuple[np.ndarray, np.ndarray]:
 
 def _shape_vectors(scene, t, r_ref, v_ref):
     """The from -> to rod vectors (n, 3) of a tether laid from its initial shape, and its side."""
-    from .diagnostics import direction_from_angles
+    from ..diagnostics import direction_from_angles
 
     ini = t.initial
     side = 1.0 if ini.side == "up" else -1.0
     thetas, phis = ini.rod_angles_rad(t.rods)
-    if ini.shape == "equilibrium":
-        raise SceneError(f"tethers.{t.name}.initial.shape", "'straight' or 'rods' in a tree other than a star of "
-                         "point masses (the statics solve handles one tether on a fixed root)", "'equilibrium'")  # fmt: skip
     dirs = np.array([direction_from_angles(r_ref, v_ref, th, ph, side) for th, ph in zip(thetas, phis)])
     seg = t.length_m / t.rods * (1.0 + ini.strain)
     return dirs * seg, side
 
 
-def forest_state(scene, model: Model, topo, mu: float):
-    """(y0, r_ref, v_ref, sides) for any forest (see the module docstring)."""
+def forest_state(scene, graph, model: Model, mu: float):
+    """(y0, r_ref, v_ref, sides) for any forest (see the module docstring).
+
+    Checked at load (tetherlab/scene/checks.py: _check_run, _check_layout): orbit.motion is
+    'corotating' or 'translating', no tether has shape 'equilibrium', every component holds the
+    orbit reference or a body with an explicit state."""
     by_name = {b.name: b for b in scene.bodies}
     kindex = {b.name: i for i, b in enumerate(model.bodies) if b.name}
     orbit = scene.orbit
-    if orbit is not None and orbit.motion in ("equilibrium", "quasi-static"):
-        raise SceneError("orbit.motion", "'corotating' or 'translating' for a scene with rigid bodies or a tree other "
-                         "than a star (the relative-equilibrium solve handles stars of point masses)", repr(orbit.motion))  # fmt: skip
+    tethers = scene.tethers
+    parents, children, reversed_ = graph.parents, graph.child_names, graph.reversed
+    roots = graph.roots
     if orbit is not None:
         ref = orbit.state(mu)
         if ref is None:
@@ -116,48 +116,32 @@ def forest_state(scene, model: Model, topo, mu: float):
         reference = orbit.reference
         motion = orbit.motion
     else:
-        root = by_name[topo.roots[0]]
+        root = by_name[roots[0]]
         r_ref, v_ref = (np.asarray(x, float) for x in root.state(mu))
         reference = root.name
         motion = "translating"
     _, w_o = _orbit_frame(r_ref, v_ref)
     w_frame = w_o if (motion == "corotating" and w_o is not None) else np.zeros(3)
 
-    # components and their anchors
-    comp_of = {}
-    for ri, root in enumerate(topo.roots):
-        comp_of[root] = ri
-    changed = True
-    while changed:
-        changed = False
-        for k in range(len(topo.tethers)):
-            if topo.parents[k] in comp_of and topo.children[k] not in comp_of:
-                comp_of[topo.children[k]] = comp_of[topo.parents[k]]
-                changed = True
+    # components (numbered as graph.roots) and their anchors
+    comp_of = graph.component
     anchors = []
-    for ri, root in enumerate(topo.roots):
+    for ri, root in enumerate(roots):
         group = [b.name for b in scene.bodies if comp_of.get(b.name) == ri]
         if reference == "center_of_mass" and ri == 0:
             anchors.append(("center_of_mass", r_ref, v_ref))
         elif reference in group:
             anchors.append((reference, r_ref, v_ref))
         else:
-            explicit = next((n for n in group if by_name[n].has_state), None)
-            if explicit is None:
-                raise SceneError(f"bodies.{root}", "an explicit state, or tethers joining it to the orbit reference", "neither")
+            explicit = next(n for n in group if by_name[n].has_state)
             r, v = by_name[explicit].state(mu)
             anchors.append((explicit, np.asarray(r, float), np.asarray(v, float)))
 
-    # tethers in root-first order (parents before children)
-    order = []
-    placed = set(topo.roots)
-    while len(order) < len(topo.tethers):
-        for k in range(len(topo.tethers)):
-            if k not in order and topo.parents[k] in placed:
-                order.append(k)
-                placed.add(topo.children[k])
+    # tethers with every parent before its children: each is laid from its parent's position,
+    # so any such order gives the same numbers
+    order = graph.placement_order
 
-    sides = [1.0] * len(topo.tethers)
+    sides = [1.0] * len(tethers)
     nqt = model.n_qt
     att_states = {}
     pos_guess = {n: (r_ref, v_ref) for n in kindex}  # each body's (r, v) for its orbit frame
@@ -172,7 +156,7 @@ def forest_state(scene, model: Model, topo, mu: float):
                 R[n], W[n] = body_attitude(body, *pos_guess[n])
         pos = {}  # body -> centre of mass, relative to its component's root (anchored later)
         dvec = {}  # tether -> (n, 3) kernel-order rod vectors (2 sqrt3 d)
-        for ri, root in enumerate(topo.roots):
+        for ri, root in enumerate(roots):
             name = anchors[ri][0]
             if name == root and by_name[root].has_state:
                 pos[root] = np.asarray(by_name[root].state(mu)[0], float)
@@ -181,8 +165,8 @@ def forest_state(scene, model: Model, topo, mu: float):
             else:
                 pos[root] = np.zeros(3)
         for k in order:
-            t = topo.tethers[k]
-            par, ch = topo.parents[k], topo.children[k]
+            t = tethers[k]
+            par, ch = parents[k], children[k]
             spec = model.tethers[k]
             rho_a = R[par] @ np.asarray(spec.from_point_m) if par in R else np.zeros(3)
             rho_c = R[ch] @ np.asarray(spec.to_point_m) if ch in R else np.zeros(3)
@@ -195,12 +179,12 @@ def forest_state(scene, model: Model, topo, mu: float):
                     raise SceneError(f"tethers.{t.name}.to", "attachment points at different positions", "the same point")
             else:
                 vecs, sides[k] = _shape_vectors(scene, t, r_ref, v_ref)
-                if topo.reversed[k]:
+                if reversed_[k]:
                     vecs = -vecs[::-1]
             dvec[k] = vecs
             pos[ch] = A + vecs.sum(axis=0) - rho_c
         # anchor the components
-        for ri, root in enumerate(topo.roots):
+        for ri, root in enumerate(roots):
             name, ra, _ = anchors[ri]
             if name == root or name == "center_of_mass":
                 continue
@@ -210,7 +194,7 @@ def forest_state(scene, model: Model, topo, mu: float):
                 pos[n] = pos[n] + shift
         # assemble y (positions), centre-of-mass reference shifted afterwards
         y = np.zeros(model.n_state)
-        for ri, root in enumerate(topo.roots):
+        for ri, root in enumerate(roots):
             qo = model.root_offset(kindex[root])
             y[qo : qo + 3] = pos[root]
         for k, vecs in dvec.items():
@@ -225,11 +209,11 @@ def forest_state(scene, model: Model, topo, mu: float):
                 if comp_of.get(n) == 0:
                     pos[n] = pos[n] + shift
             qo = model.root_offset(0)
-            y[qo : qo + 3] = pos[topo.roots[0]]
+            y[qo : qo + 3] = pos[roots[0]]
         # velocities
         vel = {}
         anchor_v = {}
-        for ri, root in enumerate(topo.roots):
+        for ri, root in enumerate(roots):
             name, ra, va = anchors[ri]
             ra = r_ref if name == "center_of_mass" else ra
             anchor_v[ri] = (ra, va)
@@ -239,14 +223,14 @@ def forest_state(scene, model: Model, topo, mu: float):
             return va + np.cross(w_frame, r - ra)
 
         extra = {}  # body -> list of (omega_rel, centre) of rigid ancestors (incl. itself)
-        for ri, root in enumerate(topo.roots):
+        for ri, root in enumerate(roots):
             vel[root] = base_v(ri, pos[root])
             if by_name[root].has_state and (anchors[ri][0] != "center_of_mass"):
                 vel[root] = np.asarray(by_name[root].state(mu)[1], float) if anchors[ri][0] == root or orbit is None else vel[root]
             extra[root] = [(R[root] @ W[root] - w_frame, pos[root])] if root in R else []
         for k in order:
-            t = topo.tethers[k]
-            par, ch = topo.parents[k], topo.children[k]
+            t = tethers[k]
+            par, ch = parents[k], children[k]
             ri = comp_of[par]
             ex = extra[par]
             sl = model.rod_slices[k]
@@ -272,11 +256,10 @@ def forest_state(scene, model: Model, topo, mu: float):
                 vel[ch] = v
             y[nqt + 3 + 3 * sl.start : nqt + 3 + 3 * sl.stop] = dd.ravel()
             extra[ch] = ex + ([(R[ch] @ W[ch] - w_frame, pos[ch])] if ch in R else [])
-        for ri, root in enumerate(topo.roots):
+        for ri, root in enumerate(roots):
             qo = model.root_offset(kindex[root])
             y[nqt + qo : nqt + qo + 3] = vel[root]
         # a rigid body's velocity is that of its centre of mass; children of rigid parents got it
         # through their attachment velocities above (the kernel derives non-root states anyway)
         pos_guess = {n: (pos[n], vel[n]) for n in pos}
-    _ = math
     return y, r_ref, v_ref, sides

@@ -1,0 +1,123 @@
+"""Reading a scene: the TOML file (:func:`load_scene`) or the dictionary (``Scene.from_dict``), each
+section validated in turn, then the graph and layout checks and the checks of what can run."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from ..errors import SceneError
+from ..model import topology
+from .bodies import _parse_bodies
+from .checks import _check_forest, _check_layout, _check_orbits_duration, _check_run
+from .data import SINGULAR_AT_ORIGIN, OutputSpec, Scene
+from .keys import _reject_non_finite, _required, _string, _table
+from .orbit import _parse_orbit
+from .sections import (
+    _expand_per_body,
+    _parse_central_body,
+    _parse_duration,
+    _parse_effects,
+    _parse_epoch,
+    _parse_integrator,
+    _parse_output,
+    _parse_stop,
+)
+from .tethers import _parse_tethers
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a TOML scene file."""
+    path = Path(path)
+    if not path.is_file():
+        where = path.resolve()
+        reason = "is a directory, not a scene file" if path.is_dir() else "does not exist"
+        raise FileNotFoundError(f"scene file {str(path)!r} {reason} (resolved to {str(where)!r})")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise SceneError("", "a UTF-8 text file", f"undecodable bytes ({exc.reason})", source=str(path)) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        # Python 3.11 has no lineno attribute on the exception; the message ends "(at line L, column C)".
+        match = re.search(r"at line (\d+)", str(exc))
+        line = int(match.group(1)) if match else None
+        raise SceneError("", "valid TOML", str(exc), source=str(path), line=line) from None
+    return Scene.from_dict(data, source=str(path))
+
+
+_TOP_KEYS = (
+    "name",
+    "description",
+    "epoch",
+    "duration",
+    "central_body",
+    "effects",
+    "bodies",
+    "tethers",
+    "orbit",
+    "integrator",
+    "output",
+    "stop",
+)
+
+
+def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
+    _reject_non_finite(data, "")
+    top = _table(data, "", _TOP_KEYS)
+
+    if "name" in top:
+        name = _string(top["name"], "name", "a non-empty string")
+        if not name.strip():
+            raise SceneError("name", "a non-empty string", repr(name))
+    else:
+        name = Path(source).stem if source != "<dict>" else "scene"
+    description = _string(top["description"], "description") if "description" in top else None
+    epoch = _parse_epoch(top["epoch"]) if "epoch" in top else None
+
+    central = _parse_central_body(top.get("central_body", {}))
+    mu = central.mu_m3_s2
+    effects = _parse_effects(_required(top, "effects", "", "a table of effects, e.g. central_gravity = {}"))
+    origin_singular = [e.name for e in effects if e.name in SINGULAR_AT_ORIGIN]
+    bodies = _parse_bodies(
+        _required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu, origin_singular
+    )
+    effects = _expand_per_body(effects, bodies)
+    tethers = _parse_tethers(top.get("tethers", {}), bodies)
+    graph = topology.build(bodies, tethers)
+    _check_forest(bodies, tethers, graph)
+    orbit = _parse_orbit(top["orbit"], bodies, mu) if "orbit" in top else None
+    graph = graph.with_layout(bodies, tethers, orbit)
+    tethers = _check_layout(bodies, tethers, orbit, mu, graph)
+
+    duration_s, duration_orbits = _parse_duration(_required(top, "duration", "", "a time (e.g. '6000 s') or 'N orbits'"))
+    if duration_orbits is not None:
+        _check_orbits_duration(top["duration"], orbit, bodies, mu)
+    integrator = _parse_integrator(top.get("integrator", {}))
+    stop = _parse_stop(top["stop"], central) if "stop" in top else None
+    scene = Scene(
+        name=name,
+        duration_s=duration_s,
+        duration_orbits=duration_orbits,
+        central_body=central,
+        effects=effects,
+        bodies=bodies,
+        tethers=tethers,
+        orbit=orbit,
+        integrator=integrator,
+        output=OutputSpec(),  # filled below: checking output times needs the resolved duration
+        description=description,
+        epoch=epoch,
+        stop=stop,
+        source=source,
+        graph=graph,
+    )
+    output = _parse_output(_required(top, "output", "", "a table with one of step, count, times"), scene.duration_seconds())
+    scene = dataclasses.replace(scene, output=output)
+    _check_run(scene)
+    return scene
