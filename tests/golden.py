@@ -47,7 +47,6 @@ def _run(path: Path) -> dict[str, np.ndarray]:
             vals = np.asarray(frame[col])
             if vals.dtype.kind in "fiub":
                 out[f"{path.stem}|{tag}|{col}"] = vals.astype(float)
-    out[f"{path.stem}|stats|n_rhs"] = np.array([float(res.stats.get("n_rhs", -1))])
     return out
 
 
@@ -68,7 +67,9 @@ def main(argv: list[str]) -> int:
         np.savez(target, **got)
         print(f"recorded {len(got)} columns of {len(SCENES)} scenes into {target}")
         return 0
-    ref = dict(np.load(target))
+    # rhs-call counts are not compared: the driver sizes its progress chunks from the wall clock,
+    # and a chunk boundary may cost an evaluation without changing a bit of the solution
+    ref = {k: v for k, v in np.load(target).items() if "|stats|" not in k}
     bad = 0
     for key in sorted(set(ref) | set(got)):
         a, b = ref.get(key), got.get(key)
