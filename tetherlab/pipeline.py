@@ -835,8 +835,10 @@ def run_segments(prep: Prepared, plan: SegmentPlan, progress=None, store=None):
     }  # fmt: skip
     k, t_a, y_in, k_out, budget = loop["k"], loop["t_a"], loop["y_in"], loop["k_out"], loop["budget"]
     sums, events, anchors = loop["sums"], loop["events"], loop["anchors"]
-    ts, ys = [], []
-    ev = {"event": plan.events, "n_events": len(prep.event_names), "terminal": prep.event_terminal} if plan.events else {}
+    ts, ys = [t_out[:k_out]], []  # (a resumed run: the output times of the segments before it)
+    ev = {}
+    if plan.events is not None:
+        ev = {"event": plan.events, "n_events": len(prep.event_names), "terminal": prep.event_terminal}
     while True:
         t_b = min(t_a + seg_s, t_last)
         if t_last - t_b < 1e-6 * seg_s:  # no sliver of a segment at the end
