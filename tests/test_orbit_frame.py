@@ -108,7 +108,6 @@ def test_stop_event_located_in_the_turning_frame():
     "scene, kv, fragment",
     [
         ("catenary.toml", {}, "fixed"),
-        ("rigid-example.toml", {}, "rigid bodies"),
     ],
 )
 def test_cowell_orbit_refused_where_there_is_no_frame(scene, kv, fragment):

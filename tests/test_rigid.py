@@ -694,12 +694,16 @@ def test_loop_of_tethers_names_the_closing_tether():
     assert info.value.key == "tethers.c" and "closes a loop" in str(info.value)
 
 
-def test_rigid_bodies_refuse_dromo():
+def test_rigid_bodies_run_dromo_time_unless_it_has_no_orbit():
+    """The time form carries the attitude and wheel blocks through (tests/test_formulations_rigid.py
+    checks the numbers); what it still refuses is a scene without central_gravity."""
     d = _scene_with()
     d["integrator"] = {"formulation": "dromo-time"}
+    assert prepare(Scene.from_dict(d)).formulation == "dromo-time"
+    d["effects"] = {"j2": {}}
     with pytest.raises(SceneError) as info:
         prepare(Scene.from_dict(d))
-    assert info.value.key == "integrator.formulation"
+    assert info.value.key == "integrator.formulation" and "central_gravity" in str(info.value)
 
 
 # ------------------------------------------------------------------------------------------------

@@ -254,46 +254,16 @@ def _event_args(prep) -> dict:
 
 
 def _formulation(scene, model: Model, tethers, y0: np.ndarray, events: bool = False) -> str:
-    """The formulation the integrator runs, checked against the scene (docs/dromo.md section 7)."""
-    name = scene.integrator.formulation
-    if name == "cowell":
-        return "cowell"
-    key = "integrator.formulation"
-    if name == "cowell-orbit":
-        if model.root_fixed:
-            raise SceneError(key, "'cowell' for a scene whose root body is fixed (it has no orbit to turn with)", repr(name))
-        if model.has_attitude:
-            raise SceneError(key, "'cowell' for a scene with rigid bodies (the attitude and wheel states are not "
-                             "carried into the turning frame)", repr(name))  # fmt: skip
-        h = y0.size // 2
-        if not float(np.linalg.norm(np.cross(y0[:3], y0[h : h + 3]))) > 0.0:
-            raise SceneError(key, "'cowell' for a root body with no orbital motion about the centre (r x v = 0: "
-                             "no frame to turn with)", repr(name))  # fmt: skip
-        return "cowell-orbit"
-    if "central_gravity" not in model.effect_names:
-        # DROMO integrates the Kepler motion about the central body analytically: without
-        # central_gravity in [effects] it would add a force the scene did not name
-        raise SceneError(key, "'cowell' when [effects] does not name central_gravity (DROMO builds it in)", repr(name))
-    if model.root_fixed:
-        raise SceneError(key, "'cowell' for a scene whose root body is fixed (it has no orbit)", repr(name))
-    if model.has_attitude:
-        # DROMO's time form integrates the root's orbit in elements; the attitude and wheel blocks
-        # are not carried through its state conversion yet
-        raise SceneError(key, "'cowell' for a scene with rigid bodies (attitude and wheel states)", repr(name))
-    if name == "dromo" and not tethers and not events and len(model.bodies) == 1:
-        if scene.integrator.max_step_s is not None:
-            raise SceneError(
-                "integrator.max_step", "no max_step with formulation 'dromo' on a point mass (the independent "
-                "variable is the ideal anomaly; use 'dromo-time' to bound the time step)", f"{scene.integrator.max_step_s} s",
-            )
-        h = y0.size // 2
-        r, v = y0[:3], y0[h : h + 3]
-        energy = 0.5 * float(v @ v) - scene.central_body.mu_m3_s2 / float(np.linalg.norm(r))
-        if not energy < 0:
-            raise SceneError(key, "'dromo-time' for an orbit that is not elliptic (the sigma form schedules its "
-                             "outputs on the osculating ellipse)", repr(name))  # fmt: skip
-        return "dromo-sigma"
-    return "dromo-time"
+    """The formulation the integrator runs: the first of the scene's choice that supports the scene
+    (formulations/registry.py; docs/dromo.md section 7), else its reason as the SceneError."""
+    from .formulations.registry import Refusal, SceneFacts, choose
+
+    facts = SceneFacts(scene.integrator.formulation, y0, scene.central_body.mu_m3_s2, events,
+                       scene.integrator.max_step_s)  # fmt: skip
+    form = choose(model, facts)
+    if isinstance(form, Refusal):
+        raise SceneError(form.key, form.expected, form.got)
+    return form.name
 
 
 def _duration_hint(scene) -> float | None:
@@ -394,11 +364,10 @@ def integrate_prepared(prep: Prepared, p: np.ndarray, progress=None):
     """Integrate a prepared scene with its formulation; returns (result, the parameter block used).
 
     The result's states are Cowell states [q, q', attitude, wheels] whatever the formulation."""
-    if prep.formulation == "cowell":
-        return _integrate_cowell(prep, p, progress), p
-    if prep.formulation == "cowell-orbit":
-        return _integrate_cowell_orbit(prep, p, progress)
-    return _integrate_dromo(prep, p, progress)
+    if prep.formulation == "dromo-sigma":
+        return _integrate_dromo(prep, p, progress)
+    plan = segment_plan(prep, p)
+    return run_segments(prep, plan, progress), plan.pe
 
 
 #: The frame of formulation "cowell-orbit" is re-anchored (its rate reset to the root body's) every
@@ -406,31 +375,101 @@ def integrate_prepared(prep: Prepared, p: np.ndarray, progress=None):
 ANCHOR_ORBITS = 5.0
 
 
-def _integrate_cowell_orbit(prep: Prepared, p: np.ndarray, progress):
-    """Cowell in the frame turning with the orbit, outputs turned back to inertial Cowell states
-    (formulations/cowell_orbit.py).  The event functions are frame invariant (|r0|, rod tensions).
+@dataclass
+class SegmentPlan:
+    """How one formulation runs as a list of segments (the loop: :func:`run_segments`).
 
-    The run is a sequence of segments of ANCHOR_ORBITS reference periods; each starts from the
-    inertial state reached by the last with a frame anchored there (its rate the root body's r x v
-    / |r|^2 then), so the frame keeps up with a decaying orbit.  A failure or a terminal event ends
-    the sequence with every output computed so far."""
+    ``pe``: the parameter block with the formulation's block appended (one for the whole run: the
+    model's counters and failure records carry on); ``length_s``: a segment's length (inf: one
+    segment); ``enter(t_a, y) -> (z, ctx)``: the formulation state at a segment's start from the
+    Cowell state there (re-anchoring what the segment needs in ``pe``); ``leave(ctx, t, Z)``: Cowell
+    rows from formulation rows ``Z`` at the times ``t``; ``anchor(ctx)``: what the run's stats keep
+    of a segment (None: nothing)."""
+
+    pe: np.ndarray
+    rhs: object
+    events: object
+    atol: np.ndarray
+    second_order: object
+    length_s: float
+    enter: object
+    leave: object
+    anchor: object = None
+
+
+def segment_plan(prep: Prepared, p: np.ndarray) -> SegmentPlan:
+    """The segment plan of the prepared scene's formulation (every one but the sigma form, whose
+    independent variable is not the time)."""
+    lay = prep.model.state
+    events = _event_args(prep).get("event")
+    if prep.formulation == "cowell":
+        return SegmentPlan(p, cowell_rhs, events, prep.atol, _second_order(prep.model), math.inf,
+                           lambda t_a, y: (y, None), lambda ctx, t, Z: Z)  # fmt: skip
+    if prep.formulation == "cowell-orbit":
+        from .formulations import cowell_orbit as co
+
+        nqt = lay.n_qt
+        quats = [lay.quaternion_of(b).start for b, _ in lay.rigid]
+        pe = co.attach(p, co.frame_rate(prep.y0, nqt), 0.0)
+
+        def enter(t_a, y):
+            omega = co.frame_rate(y, nqt)
+            co.set_frame(pe, omega, t_a)
+            return co.to_frame(0.0, y, omega, nqt, quats), (t_a, omega)
+
+        def leave(ctx, t, Z):
+            t_a, omega = ctx
+            return co.to_inertial(np.asarray(t) - t_a, Z, omega, nqt, quats) if len(t) else Z
+
+        seg = ANCHOR_ORBITS * prep.ref_period_s if math.isfinite(prep.ref_period_s) else math.inf
+        return SegmentPlan(pe, co.cowell_orbit_rhs, events, prep.atol, _second_order(prep.model), seg, enter,
+                           leave, lambda ctx: [ctx[0], *ctx[1].tolist()])  # fmt: skip
+    if prep.formulation == "dromo-time":
+        from .formulations import dromo
+        from .kernel.layout import FORM_DROMO_TIME
+
+        mu = prep.mu_m3_s2
+        length_m = float(np.linalg.norm(prep.y0[lay.root_r]))  # L = |r0| (docs/dromo.md section 2)
+        pe = dromo.attach(p, FORM_DROMO_TIME, mu, length_m, lay.size)
+        # elements and sigma are O(1) non-dimensional: atol in their own units = the scene's atol,
+        # which is atol[0]/L (the root position scale is the reference radius)
+        atol = np.concatenate([np.full(8, prep.atol[0] / length_m), lay.passthrough_atol(prep.atol)])
+
+        def leave(ctx, t, Z):
+            return np.array([dromo.cowell_state(z, lay, mu, length_m) for z in Z]).reshape(len(t), lay.size)
+
+        return SegmentPlan(pe, dromo.dromo_time_rhs, dromo.dromo_time_events if events is not None else None,
+                           atol, False, math.inf, lambda t_a, y: (dromo.time_state(y, lay, mu, length_m), None),
+                           leave)  # fmt: skip
+    raise ValueError(f"formulation {prep.formulation!r}: expected one run by segments")
+
+
+def run_segments(prep: Prepared, plan: SegmentPlan, progress=None, store=None):
+    """The one loop of a run: segments of ``plan.length_s``, each started from the Cowell state the
+    last one reached (``plan.enter``), its outputs turned into Cowell rows (``plan.leave``) and
+    kept as one table.  A failure, a terminal event or the end of the outputs ends the run, with
+    every output computed so far.
+
+    ``store`` (tetherlab/runstore.py): a run written as it goes; ``store.begin(k, seg_t, n)``
+    returns the driver's ``y_out``, ``checkpoint`` and ``restart`` for segment k and
+    ``store.resume`` the loop's state at a checkpoint (None: from the start)."""
     import dataclasses
 
-    from .formulations import cowell_orbit as co
     from .integrators.driver import integrate
 
-    nqt = prep.model.n_qt
     t_out = prep.t_out
     t_last = float(t_out[-1])
-    seg_s = ANCHOR_ORBITS * prep.ref_period_s if math.isfinite(prep.ref_period_s) else t_last
-    t_a, y_in = 0.0, prep.y0.copy()
-    ts, ys, events, anchors = [], [], [], []
-    sums: dict = {}
-    budget = prep.max_steps
-    k_out = 0  # first output not yet produced
-    # one parameter block for the whole run (the model's counters and failure records carry on);
-    # each segment sets its frame in it
-    pe = co.attach(p, co.frame_rate(y_in, nqt), t_a)
+    seg_s = plan.length_s if plan.length_s < t_last else t_last
+    loop = store.resume if store is not None and store.resume is not None else {
+        "k": 0, "t_a": 0.0, "y_in": prep.y0, "k_out": 0, "budget": prep.max_steps, "sums": {}, "events": [],
+        "anchors": [],
+    }  # fmt: skip
+    k, t_a, y_in, k_out, budget = loop["k"], loop["t_a"], loop["y_in"], loop["k_out"], loop["budget"]
+    sums, events, anchors = loop["sums"], loop["events"], loop["anchors"]
+    ts, ys = [t_out[:k_out]], []  # (a resumed run: the output times of the segments before it)
+    ev = {}
+    if plan.events is not None:
+        ev = {"event": plan.events, "n_events": len(prep.event_names), "terminal": prep.event_terminal}
     while True:
         t_b = min(t_a + seg_s, t_last)
         if t_last - t_b < 1e-6 * seg_s:  # no sliver of a segment at the end
@@ -440,12 +479,20 @@ def _integrate_cowell_orbit(prep: Prepared, p: np.ndarray, progress):
         extra = seg_t.size == 0 or seg_t[-1] < t_b
         if extra:
             seg_t = np.concatenate([seg_t, [t_b]])
-        omega = co.frame_rate(y_in, nqt)
-        anchors.append([t_a, *omega.tolist()])
-        co.set_frame(pe, omega, t_a)
-        res = integrate(prep.method, co.cowell_orbit_rhs, t_a, co.to_frame(0.0, y_in, omega, nqt), seg_t, pe,
-                        prep.rtol, prep.atol, h_max=prep.h_max, max_steps=budget, progress=progress,
-                        second_order=True, **_event_args(prep))  # fmt: skip
+        z0, ctx = plan.enter(t_a, y_in)
+        if plan.anchor is not None and len(anchors) <= k:
+            anchors.append(plan.anchor(ctx))
+        io = {} if store is None else store.begin(k, seg_t, z0.size, dict(loop, k=k, t_a=t_a, y_in=y_in, k_out=k_out,
+                                                                            budget=budget), ctx)  # fmt: skip
+        res = integrate(prep.method, plan.rhs, t_a, z0, seg_t, plan.pe, prep.rtol, plan.atol, h_max=prep.h_max,
+                        max_steps=budget, progress=progress, second_order=plan.second_order, **ev, **io)  # fmt: skip
+        if k == 0 and t_b >= t_last and not extra and store is None and plan.anchor is None:
+            # one segment: the driver's result as it is, in Cowell rows
+            y_rows = plan.leave(ctx, res.t, res.y)
+            if y_rows is res.y:
+                return res
+            return dataclasses.replace(res, y=y_rows, y_end=plan.leave(ctx, [res.t_end], res.y_end[None, :])[0],
+                                       stats=dict(res.stats))  # fmt: skip
         for key, v in res.stats.items():
             if isinstance(v, (int, float)) and not isinstance(v, bool):
                 sums[key] = sums.get(key, 0) + v
@@ -453,46 +500,46 @@ def _integrate_cowell_orbit(prep: Prepared, p: np.ndarray, progress):
                 sums.setdefault(key, v)
         budget -= int(res.stats["n_accepted"])
         events.extend(res.events)
-        y_rows = co.to_inertial(res.t - t_a, res.y, omega, nqt) if len(res.t) else res.y
-        y_in = co.to_inertial([res.t_end - t_a], res.y_end, omega, nqt)[0]
+        y_rows = plan.leave(ctx, res.t, res.y)
+        y_in = plan.leave(ctx, [res.t_end], res.y_end[None, :])[0]
         ended = res.status != 0 or res.stopped_by is not None or t_b >= t_last
         keep = len(res.t) - (1 if (extra and res.stopped_by is None and len(res.t) == seg_t.size) else 0)
         ts.append(res.t[:keep])
         ys.append(y_rows[:keep])
+        if store is not None:
+            store.end(k, k_out, res.t[:keep], y_rows[:keep])
         k_out += min(keep, k_end - k_out)
         if ended or budget <= 0:
             break
         t_a = float(res.t_end)
-    sums["frame_anchors"] = anchors  # [t_a, omega_x, omega_y, omega_z] of every segment
+        k += 1
+    if anchors:
+        sums["frame_anchors"] = anchors  # [t_a, omega_x, omega_y, omega_z] of every segment
     sums["n_events"] = len(events)
-    res = dataclasses.replace(res, t=np.concatenate(ts), y=np.concatenate(ys), y_end=y_in, stats=sums,
-                              events=tuple(events))  # fmt: skip
-    return res, pe
+    sums["n_segments"] = k + 1
+    if store is not None:  # the rows are in the store's table
+        return store.result(res, np.concatenate(ts), y_in, sums, tuple(events))
+    return dataclasses.replace(res, t=np.concatenate(ts), y=np.concatenate(ys), y_end=y_in, stats=sums,
+                               events=tuple(events))  # fmt: skip
 
 
 def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
-    """DROMO run with outputs converted back to Cowell states [r0, d, v0, d'] (docs/dromo.md 7)."""
+    """The sigma form of DROMO (a point mass): its own driver schedules the outputs in physical
+    time (propagation/dromo.py); rows [r, v] are Cowell states of the single body."""
     from .formulations import dromo
-    from .kernel.layout import FORM_DROMO_SIGMA, FORM_DROMO_TIME
+    from .kernel.layout import FORM_DROMO_SIGMA
     from .propagation import dromo as drive
 
-    h = prep.y0.size // 2
-    length_m = float(np.linalg.norm(prep.y0[:3]))  # L = |r0| (docs/dromo.md section 2)
-    if prep.formulation == "dromo-sigma":
-        pe = dromo.attach(p, FORM_DROMO_SIGMA, prep.mu_m3_s2, length_m, prep.y0.size,
-                          dromo.TIME_ELEMENTS[prep.time_element])  # fmt: skip
-        res = drive.integrate_sigma(
-            prep.method, pe, prep.y0[:3], prep.y0[h : h + 3], prep.t_out, prep.rtol,
-            prep.atol[0] / prep.ref_radius_m, prep.mu_m3_s2, length_m, max_steps=prep.max_steps,
-            progress=progress,
-        )  # fmt: skip
-    else:
-        pe = dromo.attach(p, FORM_DROMO_TIME, prep.mu_m3_s2, length_m, prep.y0.size)
-        res = drive.integrate_time(
-            prep.method, pe, prep.y0, prep.t_out, prep.rtol, prep.atol, prep.mu_m3_s2, length_m,
-            h_max=prep.h_max, max_steps=prep.max_steps, progress=progress,
-            n_events=len(prep.event_names), terminal=prep.event_terminal,
-        )  # fmt: skip
+    lay = prep.model.state
+    r0, v0 = prep.y0[lay.root_r], prep.y0[lay.root_v]
+    length_m = float(np.linalg.norm(r0))  # L = |r0| (docs/dromo.md section 2)
+    pe = dromo.attach(p, FORM_DROMO_SIGMA, prep.mu_m3_s2, length_m, prep.y0.size,
+                      dromo.TIME_ELEMENTS[prep.time_element])  # fmt: skip
+    res = drive.integrate_sigma(
+        prep.method, pe, r0, v0, prep.t_out, prep.rtol,
+        prep.atol[0] / prep.ref_radius_m, prep.mu_m3_s2, length_m, max_steps=prep.max_steps,
+        progress=progress,
+    )  # fmt: skip
     return res, pe
 
 
@@ -500,24 +547,16 @@ def _integrate_cowell(prep: Prepared, p: np.ndarray, progress, **store):
     """``store``: y_out, checkpoint, restart for runs written as they go (tetherlab/runstore.py)."""
     from .integrators.driver import integrate
 
-    return integrate(
-        prep.method,
-        cowell_rhs,
-        0.0,
-        prep.y0,
-        prep.t_out,
-        p,
-        prep.rtol,
-        prep.atol,
-        h_max=prep.h_max,
-        max_steps=prep.max_steps,
-        progress=progress,
-        # Cowell: y = [q, q', attitude, wheels] with q' exact for the first NQT components (the
-        # state-layout descriptor): RADAU5 reduces its Newton systems to n - NQT unknowns
-        second_order=True if not prep.model.has_attitude else prep.model.n_qt,
-        **_event_args(prep),
-        **store,
-    )
+    return integrate(prep.method, cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol, h_max=prep.h_max,
+                     max_steps=prep.max_steps, progress=progress, second_order=_second_order(prep.model),
+                     **_event_args(prep), **store)  # fmt: skip
+
+
+def _second_order(model):
+    """The driver's ``second_order`` for a state y = [q, q', attitude, wheels] with q' exact for the
+    first n_qt components (the state layout): RADAU5 reduces its Newton systems to n - n_qt
+    unknowns.  True (y = [q, q'] exactly) without first-order blocks."""
+    return True if not model.state.has_attitude else model.state.n_qt
 
 
 class _ProgressBar:

@@ -86,6 +86,19 @@ def output_rows(scene) -> tuple[int, str] | None:
     return int(math.floor(duration / out.step_s + 1e-9)) + 2, "output.step"
 
 
+def scene_layout(scene):
+    """The StateLayout (model/state.py) the scene's model will have, from the scene's counts alone
+    (the model is built after this check): rods per tether, the other roots of a forest (one per
+    group of bodies joined by tethers, past the first), each rigid body with its wheels."""
+    from .model.state import StateLayout
+
+    tethers = list(scene.tethers)
+    other = tuple(range(1 + len(tethers), len(scene.bodies)))  # kernel order: root 0, the tethers' ends, the rest
+    # (the rigid bodies in file order: the same sizes as the kernel's order)
+    rigid = tuple((b, len(body.rigid.wheels)) for b, body in enumerate(scene.bodies) if body.rigid is not None)
+    return StateLayout(rods=tuple(t.rods for t in tethers), other_roots=other, rigid=rigid)
+
+
 def estimate(scene) -> Need | None:
     rows_key = output_rows(scene)
     if rows_key is None:
@@ -94,7 +107,7 @@ def estimate(scene) -> Need | None:
     tethers = list(scene.tethers)
     nr = sum(t.rods for t in tethers)
     nj = sum(t.rods + 1 for t in tethers)
-    n = 6 * (1 + nr)
+    n = scene_layout(scene).size
     ts_cols = 1 + 6 + sum((6 if scene.body(t.to_body).mass_kg > 0 else 0) + 3 * (t.rods + 1) + 2 * t.rods
                           + (t.rods + 1) for t in tethers)  # fmt: skip  (Result.from_run)
     dg_cols = 18 + 2 * len(tethers)

@@ -35,8 +35,20 @@ returns (about half a second), the state is checkpointed, the rows computed are 
 Parquet, ``run.json`` says ``interrupted``, and :class:`Interrupted` tells the caller (the CLI
 prints how to resume).  A SIGKILL leaves the last checkpoint: the run continues from there.
 
-Only the native methods on the Cowell formulation are checkpointed (the loop above); a DROMO
-or scipy run writes the same files when it ends, and cannot be resumed.
+Every formulation but DROMO's sigma form runs through the one segment loop
+(tetherlab/pipeline.py ``run_segments``): a run is a list of segments (cowell-orbit re-anchors its
+frame every ANCHOR_ORBITS periods; Cowell and DROMO's time form are one segment), each with its own
+state layout.  Cowell rows go straight into ``states.npy``; another formulation's rows go into
+``segments/seg-KKKKK.npy`` (its own state, ``(rows of the segment, its state length)``) and are
+turned into Cowell rows of ``states.npy`` when the segment ends, so ``states.npy`` and the
+Parquet parts are one Cowell table whatever the formulation (parts are written as their rows are
+final: per chunk for Cowell, per segment otherwise).  The checkpoint adds the loop's own state
+(segment index, its start time and Cowell start state, the rows before it, the step budget, the
+summed statistics, the events, the frame anchors): a resumed run re-enters the same segment with
+the same anchor and continues the driver from its checkpoint, so it is identical across segments
+too.  A run with a native method (dop853, vern9, radau5) is checkpointed; DROMO's sigma form (its
+own output clock, propagation/dromo.py) and scipy runs write the same files when they end, and
+cannot be resumed.
 """
 
 from __future__ import annotations
@@ -55,6 +67,7 @@ import numpy as np
 FORMAT = 1
 STATES = "states.npy"
 CHECKPOINT = "checkpoint.npz"
+SEGMENTS = "segments"  # a formulation's own rows of the running segment (not Cowell's)
 RUN_JSON = "run.json"
 TABLES = ("timeseries", "diagnostics")
 
@@ -73,9 +86,9 @@ class Interrupted(Exception):
             text = (f"interrupted at t = {t:.9g} s of {t_end:.9g} s; {rows} output rows saved in {out_dir}/. "
                     f"Continue with: tetherlab run --resume {out_dir}")  # fmt: skip
         else:
-            text = (f"interrupted; this run (DROMO, cowell-orbit or a scipy method) keeps no checkpoints, "
-                    f"nothing was saved in {out_dir}/: run it again (the Cowell formulation with dop853, "
-                    f"vern9 or radau5 can be resumed)")  # fmt: skip
+            text = (f"interrupted; this run (DROMO's sigma form or a scipy method) keeps no checkpoints, "
+                    f"nothing was saved in {out_dir}/: run it again (runs with dop853, vern9 or radau5 "
+                    f"in the other formulations can be resumed)")  # fmt: skip
         super().__init__(text)
 
 
@@ -133,7 +146,7 @@ class _Store:
         self.prep = prep
         self.part_rows = int(part_rows)
         self.m = int(prep.t_out.size)
-        self.n = int(prep.y0.size)
+        self.n = int(prep.model.state.size)
 
     # -- derived tables ------------------------------------------------------------------------
     def write_part(self, k: int, t: np.ndarray, Y: np.ndarray, p: np.ndarray, first: np.ndarray | None) -> None:
@@ -199,7 +212,7 @@ class _Store:
 def _streamable(prep) -> bool:
     from .integrators.driver import NATIVE_METHODS
 
-    return prep.formulation == "cowell" and prep.method in NATIVE_METHODS
+    return prep.formulation != "dromo-sigma" and prep.method in NATIVE_METHODS
 
 
 def _part_rows_for(scene, m: int) -> int:
@@ -247,6 +260,9 @@ def run_to_dir(scene, out_dir, *, progress=None, checkpoint_s: float = 5.0, part
         check_scene(scene, outputs_in_memory=True)
     for f in (STATES, CHECKPOINT):
         (out / f).unlink(missing_ok=True)
+    import shutil
+
+    shutil.rmtree(out / SEGMENTS, ignore_errors=True)
     m = int(prep.t_out.size)
     B = int(part_rows) if part_rows else _part_rows_for(scene, m)
     store = _Store(out, scene, prep, B)
@@ -256,7 +272,9 @@ def run_to_dir(scene, out_dir, *, progress=None, checkpoint_s: float = 5.0, part
         "state": "running",
         "scene": scene.to_dict(),
         "rows": m,
-        "state_length": int(prep.y0.size),
+        "state_length": int(prep.model.state.size),
+        # the named blocks of every states.npy row (model/state.py: StateLayout.blocks)
+        "state_blocks": [[b.name, b.start, b.stop] for b in prep.model.state.blocks()],
         "part_rows": B,
         "code_digest": _code_digest(),
         "resumable": _streamable(prep),
@@ -265,7 +283,7 @@ def run_to_dir(scene, out_dir, *, progress=None, checkpoint_s: float = 5.0, part
     _write_json(out / RUN_JSON, record)
     if not _streamable(prep):
         return _run_in_memory(store, record, progress)
-    states = np.lib.format.open_memmap(out / STATES, mode="w+", dtype=np.float64, shape=(m, prep.y0.size))
+    states = np.lib.format.open_memmap(out / STATES, mode="w+", dtype=np.float64, shape=(m, prep.model.state.size))
     return _run_streamed(store, record, states, prep.model.fresh_params(), None, progress, checkpoint_s)
 
 
@@ -287,8 +305,8 @@ def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
     if state in ("complete", "failed"):
         raise RunDirError(f"{str(out)!r}: nothing to resume, the run is {state} ({record.get('message', '')})")
     if not record.get("resumable"):
-        raise RunDirError(f"{str(out)!r}: this run cannot be resumed (only native methods on the Cowell "
-                          f"formulation are checkpointed); start it again with --out")  # fmt: skip
+        raise RunDirError(f"{str(out)!r}: this run cannot be resumed (DROMO's sigma form and scipy methods "
+                          f"keep no checkpoints); start it again with --out")  # fmt: skip
     if record.get("code_digest") != _code_digest():
         raise RunDirError(
             f"{str(out)!r} was started by other tetherlab sources (digest {record.get('code_digest')}, these are "
@@ -298,8 +316,8 @@ def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
     scene = Scene.from_dict(record["scene"])
     prep = prepare(scene, outputs_in_memory=False, out_dir=out)
     m = int(prep.t_out.size)
-    if m != record["rows"] or prep.y0.size != record["state_length"]:
-        raise RunDirError(f"{str(out)!r}: the stored scene rebuilds to {m} outputs of {prep.y0.size} "
+    if m != record["rows"] or prep.model.state.size != record["state_length"]:
+        raise RunDirError(f"{str(out)!r}: the stored scene rebuilds to {m} outputs of {prep.model.state.size} "
                           f"floats, the run has {record['rows']} of {record['state_length']}")  # fmt: skip
     store = _Store(out, scene, prep, record["part_rows"])
     p = prep.model.fresh_params()
@@ -307,21 +325,29 @@ def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
     ck = out / CHECKPOINT
     if ck.exists() and (out / STATES).exists():
         with np.load(ck, allow_pickle=False) as z:
-            if z["p"].shape != p.shape:
-                raise RunDirError(f"{str(ck)!r}: parameter block of {z['p'].size} floats, the model has {p.size}")
-            p[:] = z["p"]
             restart = {
+                # the kernel's whole block (the model's, with the formulation's block appended)
+                "p_full": z["p"].copy(),
                 "t": float(z["t"]), "h": float(z["h"]), "done": int(z["done"]), "budget": int(z["budget"]),
                 "y": z["y"].copy(), "stats": z["stats"].copy(), "ev": z["ev"].copy(),
                 "ws": [z[f"ws{i}"].copy() for i in range(int(z["n_ws"]))], "resume": bool(z["resume"]),
                 "events": [tuple(e) for e in z["events"].tolist()],
                 "wall_s": float(z["wall_s"]), "n_chunks": int(z["n_chunks"]),
+                # the segment loop's state (pipeline.run_segments) and the driver's rows in it
+                "seg_done": int(z["seg_done"]),
+                "loop": {
+                    "k": int(z["seg_k"]), "t_a": float(z["seg_t_a"]), "y_in": z["seg_y_in"].copy(),
+                    "k_out": int(z["seg_k_out"]), "budget": int(z["seg_budget"]),
+                    "sums": json.loads(str(z["seg_sums"])),
+                    "events": [(float(a), int(b), float(c)) for a, b, c in z["seg_events"].tolist()],
+                    "anchors": json.loads(str(z["seg_anchors"])),
+                },
             }  # fmt: skip
         states = np.lib.format.open_memmap(out / STATES, mode="r+")
-        if states.shape != (m, prep.y0.size):
-            raise RunDirError(f"{str(out / STATES)!r}: shape {states.shape}, expected {(m, prep.y0.size)}")
+        if states.shape != (m, prep.model.state.size):
+            raise RunDirError(f"{str(out / STATES)!r}: shape {states.shape}, expected {(m, prep.model.state.size)}")
     else:  # killed before its first checkpoint: nothing to continue from, start it over
-        states = np.lib.format.open_memmap(out / STATES, mode="w+", dtype=np.float64, shape=(m, prep.y0.size))
+        states = np.lib.format.open_memmap(out / STATES, mode="w+", dtype=np.float64, shape=(m, prep.model.state.size))
     done = restart["done"] if restart else 0
     # Parts past the checkpoint (written after it, or a partial last part) are rebuilt.
     store.drop_parts_from(done // store.part_rows)
@@ -350,12 +376,82 @@ class _Signals:
         return False
 
 
+def _plain(x):
+    """NumPy scalars in the loop's statistics as JSON numbers."""
+    return x.item()
+
+
+class _SegmentStore:
+    """The streamed run's side of the segment loop (the ``store`` of pipeline.run_segments)."""
+
+    def __init__(self, store: _Store, states, p, restart, on_chunk):
+        self.store = store
+        self.states = states
+        self.p = p
+        self.on_chunk = on_chunk
+        self.resume = restart["loop"] if restart else None
+        self.restart = restart
+        self.direct = store.prep.formulation == "cowell"  # its rows are Cowell rows
+        self.have = store.parts_present()
+        self.y_out = None
+        self.loop = None
+
+    def begin(self, k, seg_t, n, loop, ctx) -> dict:
+        """The driver's y_out, checkpoint and restart for segment k (``loop``: the loop's state at
+        its start, saved with every checkpoint of the segment)."""
+        self.loop = loop
+        restart = None
+        if self.restart is not None and k == self.resume["k"]:
+            restart = dict(self.restart, done=self.restart["seg_done"])
+        self.restart = None
+        if self.direct:
+            self.y_out = self.states[loop["k_out"] : loop["k_out"] + seg_t.size]
+        else:
+            folder = self.store.out / SEGMENTS
+            folder.mkdir(exist_ok=True)
+            path = folder / f"seg-{k:05d}.npy"
+            if restart is not None:
+                self.y_out = np.lib.format.open_memmap(path, mode="r+")
+                if self.y_out.shape != (seg_t.size, n):
+                    raise RunDirError(f"{str(path)!r}: shape {self.y_out.shape}, expected {(seg_t.size, n)}")
+            else:
+                self.y_out = np.lib.format.open_memmap(path, mode="w+", dtype=np.float64, shape=(seg_t.size, n))
+        return {"y_out": self.y_out, "checkpoint": self._chunk, "restart": restart}
+
+    def _chunk(self, state):
+        # rows final in states.npy: the driver's for Cowell, else those of the segments done
+        done = self.loop["k_out"] + state["done"] if self.direct else self.loop["k_out"]
+        self.on_chunk(state, done, self.loop, self.y_out)
+
+    def end(self, k, k_out, t, y_rows) -> None:
+        """Segment k ended: its Cowell rows into states.npy (from row k_out), full parts written."""
+        m = self.states.shape[0]
+        rows = min(len(y_rows), m - k_out)
+        if not self.direct:
+            self.states[k_out : k_out + rows] = y_rows[:rows]
+            self.states.flush()
+        self.store.write_full_parts(self.states, k_out + rows, self.p, self.have)
+
+    def result(self, res, t, y_end, stats, events):
+        import dataclasses
+
+        rows = min(len(t), self.states.shape[0])
+        return dataclasses.replace(res, t=t[:rows], y=self.states[:rows], y_end=y_end, stats=stats, events=events)
+
+
 def _run_streamed(store: _Store, record: dict, states, p, restart, progress, checkpoint_s):
     from .integrators.driver import IntegrationResult  # noqa: F401  (the result type returned below)
-    from .pipeline import _integrate_cowell, _ProgressBar
+    from .pipeline import _ProgressBar, run_segments, segment_plan
 
     prep = store.prep
     out = store.out
+    plan = segment_plan(prep, p)
+    if restart is not None:
+        if restart["p_full"].shape != plan.pe.shape:
+            raise RunDirError(f"{str(out / CHECKPOINT)!r}: parameter block of {restart['p_full'].size} floats, "
+                              f"the model and its formulation have {plan.pe.size}")  # fmt: skip
+        plan.pe[:] = restart["p_full"]
+    p = plan.pe  # the block the kernels write (counters, failure records): the one checkpointed
     have = store.parts_present()
     if restart is not None:
         store.write_full_parts(states, restart["done"], p, have)  # any a kill left unwritten
@@ -368,18 +464,23 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
     t_wall = time.perf_counter()
     last_ck = [time.perf_counter()]
 
-    def save_checkpoint(state):
+    def save_checkpoint(state, done, loop, y_out):
         states.flush()
+        y_out.flush()
         arrays = {f"ws{i}": a for i, a in enumerate(state["ws"])}
         ev = np.array(state["events"], dtype=float).reshape(-1, 3)
         fd, tmp = tempfile.mkstemp(dir=out, prefix=".checkpoint-", suffix=".npz")
         os.close(fd)
         try:
             np.savez(
-                tmp, t=state["t"], h=state["h"], done=state["done"], budget=state["budget"], y=state["y"],
+                tmp, t=state["t"], h=state["h"], done=done, budget=state["budget"], y=state["y"],
                 stats=state["stats"], ev=state["ev"], resume=state["resume"], events=ev, p=p,
                 n_ws=len(state["ws"]), wall_s=wall_before + time.perf_counter() - t_wall,
-                n_chunks=chunks_before, **arrays,
+                n_chunks=chunks_before, seg_done=state["done"], seg_k=loop["k"], seg_t_a=loop["t_a"],
+                seg_y_in=np.asarray(loop["y_in"], float), seg_k_out=loop["k_out"], seg_budget=loop["budget"],
+                seg_sums=json.dumps(loop["sums"], default=_plain),
+                seg_anchors=json.dumps(loop["anchors"], default=_plain),
+                seg_events=np.array(loop["events"], dtype=float).reshape(-1, 3), **arrays,
             )  # fmt: skip
             os.replace(tmp, out / CHECKPOINT)
         except BaseException:
@@ -390,12 +491,11 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
 
     with _Signals() as sig:
 
-        def on_chunk(state):
-            store.write_full_parts(states, state["done"], p, have)
+        def on_chunk(state, done, loop, y_out):
+            store.write_full_parts(states, done, p, have)
             if sig.hit is not None or time.perf_counter() - last_ck[0] >= checkpoint_s:
-                save_checkpoint(state)
+                save_checkpoint(state, done, loop, y_out)
             if sig.hit is not None:
-                done = state["done"]
                 k = done // store.part_rows
                 a = k * store.part_rows
                 if done > a:  # the rows of the unfinished part, readable now, rebuilt on resume
@@ -407,8 +507,10 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
                 _write_json(out / RUN_JSON, record)
                 raise Interrupted(out, state["t"], float(prep.t_out[-1]), done)
 
+        seg_store = _SegmentStore(store, states, p, restart, on_chunk)
+        seg_store.have = have
         try:
-            res = _integrate_cowell(prep, p, bar.update, y_out=states, checkpoint=on_chunk, restart=restart)
+            res = run_segments(prep, plan, bar.update, store=seg_store)
         finally:
             bar.close()
         # (still under the handlers: a signal now, with the integration done, lets it finish)
@@ -416,7 +518,7 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
 
 
 def _run_in_memory(store: _Store, record: dict, progress):
-    """DROMO and scipy runs: integrated in memory, written when they end (no checkpoints)."""
+    """DROMO's sigma form and scipy runs: integrated in memory, written when they end (no checkpoints)."""
     from .pipeline import _ProgressBar, integrate_prepared
 
     prep = store.prep
@@ -427,7 +529,8 @@ def _run_in_memory(store: _Store, record: dict, progress):
         res, p = integrate_prepared(prep, p, bar.update)
     except KeyboardInterrupt:
         record["state"] = "interrupted"
-        record["message"] = "interrupted; this run keeps no checkpoints (DROMO, cowell-orbit or a scipy method): nothing was saved"
+        record["message"] = ("interrupted; this run keeps no checkpoints (DROMO's sigma form or a scipy method): "
+                             "nothing was saved")
         _write_json(store.out / RUN_JSON, record)
         raise Interrupted(store.out, math.nan, float(prep.t_out[-1]), 0, resumable=False) from None
     finally:

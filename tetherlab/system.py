@@ -8,6 +8,7 @@ This is the only place that knows both the boundary objects and the kernel layou
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -103,6 +104,7 @@ class Model:
     roots: list = field(default_factory=list)  # kernel indices of the root bodies
     rigid_index: dict = field(default_factory=dict)  # body index -> attitude offset in y
     wheel_index: dict = field(default_factory=dict)  # (body index, wheel name) -> state index
+    state: Any = None  # tetherlab.model.state.StateLayout: the named blocks of y (set by build_model)
 
     @property
     def n_qt(self) -> int:
@@ -393,7 +395,7 @@ def build_model(
             p[bt + L.BT_KD] = c.kd_N_m_s
             p[bt + L.BT_QT : bt + L.BT_QT + 4] = c.quaternion
 
-    return Model(
+    model = Model(
         p=p,
         root_mass_kg=root_mass_kg,
         root_fixed=root_fixed,
@@ -409,6 +411,11 @@ def build_model(
         rigid_index=rigid_index,
         wheel_index=wheel_index,
     )
+    # the state's named blocks, from the same bodies, tethers and roots as the offsets packed above
+    from .model.state import StateLayout
+
+    model.state = StateLayout.from_model(model)
+    return model
 
 
 def _with_parent(t: TetherSpec, parent: str) -> TetherSpec:

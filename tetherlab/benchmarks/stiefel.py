@@ -75,7 +75,7 @@ def runner(formulation: str, method: str, tol: float, case: str = "ex2"):
         "integrator.time_element": "linear" if te else "none",
     })  # fmt: skip
     prep = prepare(scene)
-    h = prep.y0.size // 2
+    r0, v0 = prep.y0[prep.model.state.root_r], prep.y0[prep.model.state.root_v]
     mu = prep.mu_m3_s2
     L = float(np.linalg.norm(prep.y0[:3]))
     if formulation == "cowell":
@@ -89,7 +89,7 @@ def runner(formulation: str, method: str, tol: float, case: str = "ex2"):
                           dromo.TIME_ELEMENTS[prep.time_element])  # fmt: skip
 
         def run():
-            res = drive.integrate_sigma(method, p0.copy(), prep.y0[:3], prep.y0[h : h + 3], prep.t_out,
+            res = drive.integrate_sigma(method, p0.copy(), r0, v0, prep.t_out,
                                         tol, tol, mu, L, max_steps=prep.max_steps)  # fmt: skip
             ok = res.status == 0 and len(res.t) == len(prep.t_out)
             return res.y[-1, :3] if ok else np.full(3, np.nan), dict(res.stats)

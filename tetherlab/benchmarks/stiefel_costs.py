@@ -83,11 +83,11 @@ def _rhs_probe(case: str, n_calls: int = 20_000, time_element: str = "none"):
 
     prep = prepare(load_scene(S.CASES[case][0]).replace(**{"integrator.method": "vern9",
                                                              "output.count": 2}))  # fmt: skip
-    h = prep.y0.size // 2
+    lay = prep.model.state
     L = float(np.linalg.norm(prep.y0[:3]))
     te = dromo.TIME_ELEMENTS[time_element]
     p = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, prep.mu_m3_s2, L, prep.y0.size, te)
-    z0 = dromo.sigma_state(prep.y0[:3], prep.y0[h : h + 3], prep.mu_m3_s2, L, 0.0, 0.0, te)
+    z0 = dromo.sigma_state(prep.y0[:3], prep.y0[lay.root_v], prep.mu_m3_s2, L, 0.0, 0.0, te)
     dsig = 100.0 * np.pi / n_calls  # sigma over 50 revolutions: the run's trigonometric arguments
     _rhs_chain(dromo.dromo_sigma_rhs, z0, p, 10, dsig)
     return (lambda: _rhs_chain(dromo.dromo_sigma_rhs, z0, p, n_calls, dsig)), n_calls

@@ -27,6 +27,22 @@ matrix (tether/newton.py) and the event functions (kernel/events.py: |r0| and th
 apply to the frame's state unchanged.  The Coriolis and centrifugal terms (order Omega, Omega^2)
 are not stiff and are left out of the Newton matrix.
 
+Rigid bodies (docs/integrators.md section 11): each quaternion is stored body -> frame,
+q_f = q_R^* (x) q (q_R = (cos phi/2, k sin phi/2), phi = w (t - t_a), the frame's rotation), and
+the body rate omega_b (body axes, relative to inertial space) and the wheels' momenta are kept as
+they are.  With q = q_R (x) q_f and q_R' = 1/2 (0, omega) (x) q_R,
+
+    q_f' = q_R^* (x) q' - 1/2 (0, omega) (x) q_f,
+
+q' the unchanged Cowell kinematics 1/2 q (x) (0, omega_b); Euler's equations and the wheels are
+untouched.  Why the frame for the quaternion: every position, rod vector and attitude of the frame
+state is then the inertial one turned by the same R^T, so an orbit-pointing body is nearly at rest
+in the frame as the tether is (the point of the frame), and the state reads as a rigidly turned
+inertial configuration, which is what tether/newton.py assumes of the rod blocks (an inertial
+quaternion beside the frame's rod vectors puts each attachment point off by the frame angle, up
+to 10 pi in a segment).  Why not omega_b too: the body rate relative to the frame, omega_b -
+R_f^T omega, would add a term to Euler's equations and to the wheels' for no gain.
+
 Parameter block (appended to the model's p, header H_OFF_FORM): OP_W (3) omega in rad/s, OP_T0 the
 anchor time t_a, then scratch for the inertial state and its derivative (2 x H_NSTATE).
 """
@@ -39,7 +55,7 @@ import numpy as np
 from numba import carray
 
 from .._jit import njit, rhs_cfunc
-from ..kernel.layout import FORM_COWELL_ORBIT, H_FORM, H_LEN, H_NQT, H_NSTATE, H_OFF_FORM
+from ..kernel.layout import FORM_COWELL_ORBIT, H_FORM, H_LEN, H_NQT, H_NRIGID, H_NSTATE, H_OFF_ATT, H_OFF_FORM
 from ..tether.chain import system_accelerations
 
 OP_W = 0
@@ -81,6 +97,15 @@ def _rot(kx, ky, kz, c, s, v0, v1, v2):
             v2 * c + cz * s + kz * kv * (1.0 - c))  # fmt: skip
 
 
+@njit(cache=True)
+def _qmul(aw, ax, ay, az, bw, bx, by, bz):
+    """Hamilton product a (x) b of quaternions (w, x, y, z)."""
+    return (aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw)  # fmt: skip
+
+
 @rhs_cfunc
 def cowell_orbit_rhs(t, y_ptr, dy_ptr, p_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
@@ -110,8 +135,19 @@ def cowell_orbit_rhs(t, y_ptr, dy_ptr, p_ptr):
         v2 = y[h + o + 2] + wx * q1 - wy * q0
         yi[o], yi[o + 1], yi[o + 2] = _rot(kx, ky, kz, c, s, q0, q1, q2)
         yi[h + o], yi[h + o + 1], yi[h + o + 2] = _rot(kx, ky, kz, c, s, v0, v1, v2)
-    for i in range(2 * h, n):  # (no first-order blocks: rigid bodies are refused at load)
+    for i in range(2 * h, n):  # attitude and wheel blocks: omega_b and the wheels as they are
         yi[i] = y[i]
+    nrig = int(p[H_NRIGID])
+    c2 = 1.0
+    s2 = 0.0
+    if nrig > 0:  # quaternions body -> frame to body -> inertial: q = q_R (x) q_f
+        c2 = math.cos(0.5 * w * (t - p[off + OP_T0]))
+        s2 = math.sin(0.5 * w * (t - p[off + OP_T0]))
+        att = int(p[H_OFF_ATT])
+        for j in range(nrig):
+            o = att + 7 * j
+            yi[o], yi[o + 1], yi[o + 2], yi[o + 3] = _qmul(c2, kx * s2, ky * s2, kz * s2,
+                                                           y[o], y[o + 1], y[o + 2], y[o + 3])  # fmt: skip
     st = system_accelerations(t, yi[:h], yi[h : 2 * h], yi[2 * h :], p, ai[h : 2 * h], ai[2 * h :])
     for j in range(h // 3):
         o = 3 * j
@@ -131,6 +167,16 @@ def cowell_orbit_rhs(t, y_ptr, dy_ptr, p_ptr):
         dy[h + o + 2] = a2 - 2.0 * (wx * v1 - wy * v0) - (wx * e1 - wy * e0)
     for i in range(2 * h, n):
         dy[i] = ai[i]
+    if nrig > 0:  # q_f' = q_R^* (x) q' - 1/2 (0, omega) (x) q_f
+        att = int(p[H_OFF_ATT])
+        for j in range(nrig):
+            o = att + 7 * j
+            d0, d1, d2, d3 = _qmul(c2, -kx * s2, -ky * s2, -kz * s2, ai[o], ai[o + 1], ai[o + 2], ai[o + 3])
+            e0, e1, e2, e3 = _qmul(0.0, wx, wy, wz, y[o], y[o + 1], y[o + 2], y[o + 3])
+            dy[o] = d0 - 0.5 * e0
+            dy[o + 1] = d1 - 0.5 * e1
+            dy[o + 2] = d2 - 0.5 * e2
+            dy[o + 3] = d3 - 0.5 * e3
     for i in range(h):
         dy[i] = y[h + i]
     return st
@@ -148,9 +194,27 @@ def _rotation_matrices(t: np.ndarray, omega: np.ndarray) -> np.ndarray:
     return np.eye(3) + s * K + (1.0 - c) * (K @ K)
 
 
-def to_inertial(t, Y, omega_rad_s, n_qt: int) -> np.ndarray:
-    """Cowell states [q, q_in'] (rows) from frame states [q, v] at the times ``t`` since the
-    anchor."""
+def _turn_quaternions(t, Y, omega: np.ndarray, quaternions, sign: float) -> None:
+    """In place: each quaternion block (offsets ``quaternions``) of the rows Y turned by the
+    frame's rotation q_R(t) (sign +1: body -> frame to body -> inertial, q_R (x) q_f; -1: back)."""
+    if not len(quaternions):
+        return
+    w = float(np.linalg.norm(omega))
+    k = omega / w
+    half = 0.5 * w * np.atleast_1d(np.asarray(t, dtype=float))
+    c, s = np.cos(half), sign * np.sin(half)
+    for o in quaternions:
+        b = Y[:, o : o + 4].copy()
+        Y[:, o] = c * b[:, 0] - s * (k[0] * b[:, 1] + k[1] * b[:, 2] + k[2] * b[:, 3])
+        Y[:, o + 1] = c * b[:, 1] + s * (k[0] * b[:, 0] + k[1] * b[:, 3] - k[2] * b[:, 2])
+        Y[:, o + 2] = c * b[:, 2] + s * (k[1] * b[:, 0] - k[0] * b[:, 3] + k[2] * b[:, 1])
+        Y[:, o + 3] = c * b[:, 3] + s * (k[2] * b[:, 0] + k[0] * b[:, 2] - k[1] * b[:, 1])
+
+
+def to_inertial(t, Y, omega_rad_s, n_qt: int, quaternions=()) -> np.ndarray:
+    """Cowell states [q, q_in', attitude, wheels] (rows) from frame states [q, v, attitude_f,
+    wheels] at the times ``t`` since the anchor; ``quaternions``: the offsets of the rigid bodies'
+    quaternions (StateLayout.quaternion_of), stored body -> frame in the frame state."""
     omega = np.asarray(omega_rad_s, dtype=float)
     Y = np.atleast_2d(np.asarray(Y, dtype=float))
     R = _rotation_matrices(t, omega)
@@ -160,11 +224,12 @@ def to_inertial(t, Y, omega_rad_s, n_qt: int) -> np.ndarray:
     out = Y.copy()
     out[:, :n_qt] = np.einsum("mij,mkj->mki", R, q).reshape(m, -1)
     out[:, n_qt : 2 * n_qt] = np.einsum("mij,mkj->mki", R, v).reshape(m, -1)
+    _turn_quaternions(t, out, omega, quaternions, 1.0)
     return out
 
 
-def to_frame(t: float, y, omega_rad_s, n_qt: int) -> np.ndarray:
-    """The frame state [q, v] of one Cowell state y at the time t since the anchor."""
+def to_frame(t: float, y, omega_rad_s, n_qt: int, quaternions=()) -> np.ndarray:
+    """The frame state of one Cowell state y at the time t since the anchor (:func:`to_inertial`)."""
     omega = np.asarray(omega_rad_s, dtype=float)
     y = np.asarray(y, dtype=float)
     R = _rotation_matrices(t, omega)[0]
@@ -174,6 +239,7 @@ def to_frame(t: float, y, omega_rad_s, n_qt: int) -> np.ndarray:
     out = y.copy()
     out[:n_qt] = q.ravel()
     out[n_qt : 2 * n_qt] = v.ravel()
+    _turn_quaternions([t], out[None, :], omega, quaternions, -1.0)
     return out
 
 

@@ -18,8 +18,10 @@ Two forms, both compiled cfuncs with the integrators' RHS_SIG:
 * :func:`dromo_sigma_rhs` -- a point mass, independent variable the ideal anomaly sigma,
   state z = [tau, q1, q2, q3, eta1, eta2, eta3, eta4] with tau = t/T (sheet s5, s6(a));
 * :func:`dromo_time_rhs` -- any scene, independent variable t (s): the root body's orbit in DROMO
-  elements with sigma as a state, the rods' d_i, d_i' exactly as in Cowell,
-  state y = [sigma, q1, q2, q3, eta1..eta4, d_1..d_N, d_1'..d_N'];
+  elements with sigma as a state, every other block of the Cowell state (the rods' d_i, d_i',
+  the other roots, the rigid bodies' attitudes and the wheels) passed through unchanged,
+  state y = [sigma, q1, q2, q3, eta1..eta4, q[3:], q'[3:], attitude, wheels]
+  (model/state.py: ``StateLayout.orbit_split``);
   :func:`dromo_time_events` -- the scene's event components (kernel/events.py) on that state.
 """
 
@@ -39,12 +41,13 @@ from ..kernel.layout import (
     H_DEFECT,
     H_FORM,
     H_LEN,
+    H_NQT,
     H_OFF_FORM,
     H_ROOT_M,
     MUT_TE_SECULAR,
 )
 from ..kernel.events import event_values
-from ..tether.chain import accelerations
+from ..tether.chain import system_accelerations
 
 # Formulation block (at p[H_OFF_FORM]): mu, L, T, Cowell state length, DROMO state length;
 # a scratch buffer (q, q', acc of the Cowell coordinates) starts at FP_BUF.
@@ -261,11 +264,12 @@ def dromo_time_rhs(t, y_ptr, dy_ptr, p_ptr):
     mu = p[off + FP_MU]
     L = p[off + FP_L]
     T = p[off + FP_T]
-    h = int(p[off + FP_NCOW]) // 2  # 3 (1 + N)
-    n = int(p[off + FP_NSTATE])  # 8 + 2 (h - 3)
+    h = int(p[H_NQT])  # q_trans of the Cowell state
+    n = int(p[off + FP_NSTATE])  # 8 + 2 (h - 3) + the attitude and wheel blocks
     y = carray(y_ptr, (n,))
     dy = carray(dy_ptr, (n,))
     nd = h - 3
+    a0 = 8 + 2 * nd  # the first-order blocks pass through: the Cowell kernel's own derivatives
     b = off + FP_BUF
     q = p[b : b + h]
     qd = p[b + h : b + 2 * h]
@@ -281,7 +285,7 @@ def dromo_time_rhs(t, y_ptr, dy_ptr, p_ptr):
     for i in range(nd):
         q[3 + i] = y[8 + i]
         qd[3 + i] = y[8 + nd + i]
-    status = accelerations(t, q, qd, p, acc)
+    status = system_accelerations(t, q, qd, y[a0:n], p, acc, dy[a0:n])
     if status != 0:
         return status
     _perturbation_rates(c, sn, y, acc[0], acc[1], acc[2], rx, ry, rz, ix, iy, iz, jx, jy, jz,
@@ -307,7 +311,7 @@ def dromo_time_events(t, y_ptr, g_ptr, p_ptr):
     off = int(p[H_OFF_FORM])
     L = p[off + FP_L]
     T = p[off + FP_T]
-    h = int(p[off + FP_NCOW]) // 2
+    h = int(p[H_NQT])
     n = int(p[off + FP_NSTATE])
     y = carray(y_ptr, (n,))
     nd = h - 3
@@ -502,8 +506,9 @@ def attach(p: np.ndarray, form: int, mu_m3_s2: float, length_m: float, n_cowell:
     if time_element not in (TIME_PHYSICAL, TIME_LINEAR) or (form == FORM_DROMO_TIME and time_element != TIME_PHYSICAL):
         raise ValueError(f"time_element: expected TIME_PHYSICAL, or TIME_LINEAR with the sigma form; got {time_element!r}")
     L, T = units(mu_m3_s2, length_m)
-    h = n_cowell // 2
-    n_state = 8 if form == FORM_DROMO_SIGMA else 8 + 2 * (h - 3)
+    h = int(p[H_NQT])
+    # the time form: the root orbit's 6 Cowell components become sigma and the 7 elements
+    n_state = 8 if form == FORM_DROMO_SIGMA else n_cowell + 2
     off = p.size
     block = np.zeros(FP_BUF + 3 * h)
     block[FP_MU] = mu_m3_s2
@@ -519,15 +524,15 @@ def attach(p: np.ndarray, form: int, mu_m3_s2: float, length_m: float, n_cowell:
     return out
 
 
-def time_state(y_cowell: np.ndarray, mu_m3_s2: float, length_m: float, sigma0: float = 0.0) -> np.ndarray:
-    """Time-form state [sigma, elements, d, d'] from a Cowell state [r0, d, v0, d']."""
-    h = y_cowell.size // 2
-    el = cartesian_to_dromo(y_cowell[:3], y_cowell[h : h + 3], mu_m3_s2, length_m, sigma0)
-    return np.concatenate([[sigma0], el, y_cowell[3:h], y_cowell[h + 3 :]])
+def time_state(y_cowell: np.ndarray, layout, mu_m3_s2: float, length_m: float, sigma0: float = 0.0) -> np.ndarray:
+    """Time-form state [sigma, elements, pass-through] from a Cowell state (``layout``: its
+    :class:`~tetherlab.model.state.StateLayout`; only the root orbit is mapped)."""
+    r, v, rest = layout.orbit_split(y_cowell)
+    el = cartesian_to_dromo(r, v, mu_m3_s2, length_m, sigma0)
+    return np.concatenate([[sigma0], el, rest])
 
 
-def cowell_state(y_time: np.ndarray, mu_m3_s2: float, length_m: float) -> np.ndarray:
-    """Cowell state [r0, d, v0, d'] from a time-form state [sigma, elements, d, d']."""
-    nd = (y_time.size - 8) // 2
+def cowell_state(y_time: np.ndarray, layout, mu_m3_s2: float, length_m: float) -> np.ndarray:
+    """Cowell state from a time-form state [sigma, elements, pass-through] (:func:`time_state`)."""
     r, v = dromo_to_cartesian(y_time[0], y_time[1:8], mu_m3_s2, length_m)
-    return np.concatenate([r, y_time[8 : 8 + nd], v, y_time[8 + nd :]])
+    return layout.orbit_join(r, v, y_time[8:])

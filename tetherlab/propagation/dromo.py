@@ -259,29 +259,28 @@ def _add_stats(total: dict, part: dict) -> None:
         total[k] = total.get(k, 0) + int(part.get(k, 0))
 
 
-def integrate_time(method, p_ext, y0_cowell, t_out, rtol, atol_cowell, mu, length_m, h_max=0.0,
-                   max_steps=10**7, progress=None, n_events=0, terminal=()):  # fmt: skip
+def integrate_time(method, p_ext, layout, y0_cowell, t_out, rtol, atol_cowell, mu, length_m, h_max=0.0,
+                   max_steps=10**7, progress=None, n_events=0, terminal=(), t0=0.0):  # fmt: skip
     """Time form: integrate and return an IntegrationResult whose ``y`` rows are Cowell states.
 
     ``n_events`` > 0: the scene's event components (kernel/events.py, as many as the Cowell run
     would locate; ``terminal`` their flags) are located on the same physical state through
     :func:`formulations.dromo.dromo_time_events`; the result's ``events`` and ``stopped_by``
-    are the driver's."""
+    are the driver's.  ``layout``: the Cowell state's StateLayout (model/state.py): only its
+    root-orbit block is mapped to DROMO, every other block passes through."""
     from ..integrators.driver import IntegrationResult, integrate
 
-    z0 = time_state(np.asarray(y0_cowell, float), mu, length_m)
-    h = y0_cowell.size // 2
-    a = np.asarray(atol_cowell, float)
+    z0 = time_state(np.asarray(y0_cowell, float), layout, mu, length_m)
     # elements and sigma are O(1) non-dimensional: atol in their own units = the scene's atol,
     # which is atol_cowell[0]/L (the root position scale is the reference radius)
-    a_el = a[0] / length_m
-    atol = np.concatenate([np.full(8, a_el), a[3:h], a[h + 3 :]])
+    a = np.asarray(atol_cowell, float)
+    atol = np.concatenate([np.full(8, a[0] / length_m), layout.passthrough_atol(a)])
     ev = {"event": dromo_time_events, "n_events": n_events, "terminal": terminal} if n_events else {}
-    res = integrate(method, dromo_time_rhs, 0.0, z0, t_out, p_ext, rtol, atol, h_max=h_max,
+    res = integrate(method, dromo_time_rhs, t0, z0, t_out, p_ext, rtol, atol, h_max=h_max,
                     max_steps=max_steps, progress=progress, **ev)  # fmt: skip
-    Y = np.array([cowell_state(z, mu, length_m) for z in res.y]).reshape(len(res.t), y0_cowell.size)
+    Y = np.array([cowell_state(z, layout, mu, length_m) for z in res.y]).reshape(len(res.t), layout.size)
     return IntegrationResult(t=res.t, y=Y, status=res.status, message=res.message, t_end=res.t_end,
-                             y_end=cowell_state(res.y_end, mu, length_m), stats=dict(res.stats),
+                             y_end=cowell_state(res.y_end, layout, mu, length_m), stats=dict(res.stats),
                              events=res.events, stopped_by=res.stopped_by)  # fmt: skip
 
 
