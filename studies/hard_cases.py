@@ -292,14 +292,14 @@ def printed_negative_control(paper_tight: dict, fname: str = "hard-massratio-sma
     from tetherlab import diagnostics as D
     from tetherlab.formulations.cowell import cowell_rhs
     from tetherlab.integrators import integrate
-    from tetherlab.kernel import layout as L
+    from tetherlab.model.params import MODEL_PRINTED, ParamView
     from tetherlab.pipeline import prepare
     from tetherlab.scene import load_scene
     from tetherlab.summaries import own_angular_momentum_scale
 
     sc = load_scene(SCENES / fname).replace(**{"integrator.rtol": tol, "integrator.atol": tol})
     prep = prepare(sc)
-    prep.model.p[int(prep.model.p[L.H_OFF_TETH]) + L.TT_MODEL] = L.MODEL_PRINTED
+    ParamView(prep.model.p).tether(0).model = MODEL_PRINTED
     r = integrate(sc.integrator.method, cowell_rhs, 0.0, prep.y0, prep.t_out, prep.model.fresh_params(),
                   prep.rtol, prep.atol, second_order=True)  # fmt: skip
     g = D.compute(prep.model, r.t, r.y)["global"]

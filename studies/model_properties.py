@@ -38,7 +38,7 @@ from scipy.optimize import brentq, least_squares, root
 from tetherlab import diagnostics as D
 from tetherlab.forces import EFFECTS
 from tetherlab.formulations.cowell import cowell_rhs
-from tetherlab.kernel import layout as L
+from tetherlab.model.params import ParamView
 from tetherlab.system import TetherSpec, build_model, center_of_mass, chain_state, point_positions, tolerance_scales
 from tetherlab.tether.chain import accelerations
 
@@ -102,12 +102,12 @@ def g(x, digits=2):
 # ------------------------------------------------------------------------------------------------
 def set_rod_masses(model, weights):
     """Redistribute the tether's mass over its rods in proportion to ``weights`` (total kept)."""
-    off = int(model.p[L.H_OFF_ROD])
+    rods = ParamView(model.p).rods
     w = np.asarray(weights, float)
     w = w / w.sum()
     mt = model.tethers[0].mass_kg
     for gi, f in enumerate(w):
-        model.p[off + gi * L.RT_SIZE + L.RT_M] = mt * f
+        rods[gi].mass_kg = mt * f
 
 
 def unequal(n):
@@ -160,12 +160,9 @@ def power_balance(model, y, mu):
     q, qd = y[:h].copy(), y[h:].copy()
     acc = np.zeros(h)
     assert accelerations(0.0, q, qd, p, acc) == 0
-    scr = int(p[L.H_OFF_SCR])
-    jscr = scr + nr * L.SR_SIZE
-    offq = int(p[L.H_OFF_QUAD])
-    nq = int(p[L.H_NQ])
-    nodes = p[offq : offq + 2 * nq]
-    wts = p[offq + 2 * nq : offq + 4 * nq]
+    view = ParamView(p)
+    nodes = view.quadrature_nodes
+    wts = view.quadrature_weights
     masses = model.rod_masses()
     lus = model.rod_lengths()
     ea = model.tethers[0].ea_n
@@ -198,11 +195,11 @@ def power_balance(model, y, mu):
             f = 0.5 * m * grav(x_pt + s * SQ3 * d)
             pgrav += w * f @ (v_pt + s * SQ3 * dd)
             qlag += SQ3 * xi * w * f
-        sb = scr + i * L.SR_SIZE
-        r1, r2 = p[sb + L.SR_R1 : sb + L.SR_R1 + 3], p[sb + L.SR_R2 : sb + L.SR_R2 + 3]
-        fe = p[sb + L.SR_FE]
-        ja = p[jscr + i * L.SJ_SIZE + L.SJ_J : jscr + i * L.SJ_SIZE + L.SJ_J + 3]
-        jb = p[jscr + (i + 1) * L.SJ_SIZE + L.SJ_J : jscr + (i + 1) * L.SJ_SIZE + L.SJ_J + 3]
+        rs = view.rod_scratch[i]
+        r1, r2 = rs.r1, rs.r2
+        fe = rs.fe
+        ja = view.joint_scratch[i].j_N
+        jb = view.joint_scratch[i + 1].j_N
         dT_u = (-jb - ja) @ u  # T_A = J_{i-1}, T_B = -J_i
         if model.tethers[0].model != "energy":
             closed += (u @ dd) * ((r2 - r1 - qlag) @ u + (SQ3 - 1) * (2 * fe - dT_u))

@@ -120,7 +120,7 @@ def _hub_tension(ts, tether: str) -> np.ndarray:
 
 class kernel_defect:
     """Context manager: every run prepared inside it carries the kernel's deliberate defect
-    ``name`` (tetherlab.kernel.layout.DEFECT_*, negative controls only; a scene cannot ask for
+    ``name`` (tetherlab.model.params.DEFECT_*, negative controls only; a scene cannot ask for
     one).  Implemented by wrapping tetherlab.pipeline.prepare, so the defect cannot leak out."""
 
     def __init__(self, name: str):
@@ -128,14 +128,14 @@ class kernel_defect:
 
     def __enter__(self):
         import tetherlab.pipeline as P
-        from tetherlab.kernel import layout as L
+        from tetherlab.model import params as L
 
         self._P, self._orig = P, P.prepare
         code = getattr(L, self.name)
 
         def prepare_with_defect(scene, *a, **k):
             prep = self._orig(scene, *a, **k)
-            prep.model.p[L.H_DEFECT] = code
+            L.ParamView(prep.model.p).defect = code
             return prep
 
         P.prepare = prepare_with_defect

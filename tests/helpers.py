@@ -10,7 +10,7 @@ SCENES = ROOT / "studies" / "scenes"
 MU_EARTH = 3.986004418e14  # m^3/s^2, the scene preset "earth" (tetherlab/scene/data.py)
 
 from tetherlab.diagnostics import zero_crossing_frequency  # noqa: E402,F401  (re-export for the tests)
-from tetherlab.kernel import layout as _L  # noqa: E402
+from tetherlab.model.params import ParamView  # noqa: E402
 import numpy as np  # noqa: E402
 
 
@@ -37,12 +37,11 @@ def forget_study(name: str) -> None:
 
 def newton_roots(p):
     """[(body, its position offset in q, mass or 0 when fixed)] of every root (tetherlab/system.py)."""
-    offb = int(p[_L.H_OFF_BODY])
+    v = ParamView(p)
     out = []
-    for i in range(int(p[_L.H_NROOT])):
-        b = int(p[int(p[_L.H_OFF_ROOTS]) + i])
-        bt = offb + b * _L.BT_SIZE
-        out.append((b, int(p[bt + _L.BT_QOFF]), p[bt + _L.BT_M] if p[bt + _L.BT_INV_M] > 0 else 0.0))
+    for b in v.roots.astype(int):
+        body = v.body(b)
+        out.append((int(b), body.qtrans_index, body.mass_kg if body.inv_mass_1_kg > 0 else 0.0))
     return out
 
 
@@ -51,8 +50,8 @@ def dense_newton_A(p, blk, m1):
     densely in numpy from the rod blocks and the parameter block (independent of
     newton.factor/solve; tests/test_newton_structured.py and test_newton_forest.py): T of sums from every root's own position block,
     M_x, K_x, C_x rod by rod, each root's row its mass (a fixed root: no row, A = 0 there)."""
-    offt = int(p[_L.H_OFF_TETH])
-    nteth = int(p[_L.H_NTETH])
+    tethers = ParamView(p).tethers
+    nteth = len(tethers)
     roots = newton_roots(p)
     qoff = {b: qo for b, qo, _ in roots}
     fixed = {qo for _, qo, m in roots if m == 0.0}
@@ -60,8 +59,8 @@ def dense_newton_A(p, blk, m1):
     def joint_of_body(body):
         if body in qoff:
             return qoff[body]
-        tb = offt + (body - 1) * _L.TT_SIZE
-        return 3 + 3 * (int(p[tb + _L.TT_ROD0]) + int(p[tb + _L.TT_NRODS]) - 1)
+        t = tethers[body - 1]
+        return 3 + 3 * (t.rod0 + t.n_rods - 1)
 
     T = np.zeros((m1, m1))
     M = np.zeros((m1, m1))
@@ -74,14 +73,14 @@ def dense_newton_A(p, blk, m1):
     order = []
     while len(order) < nteth:  # parents before children, for T
         for k in range(nteth):
-            par = int(p[offt + k * _L.TT_SIZE + _L.TT_PARENT])
+            par = tethers[k].parent
             if k not in order and par in placed:
                 order.append(k)
                 placed.add(1 + k)
     for k in order:
-        tb = offt + k * _L.TT_SIZE
-        n, g0 = int(p[tb + _L.TT_NRODS]), int(p[tb + _L.TT_ROD0])
-        pa = joint_of_body(int(p[tb + _L.TT_PARENT]))
+        t = tethers[k]
+        n, g0 = t.n_rods, t.rod0
+        pa = joint_of_body(t.parent)
         for i in range(n):
             g = g0 + i
             oa, ob = (pa if i == 0 else 3 * g), 3 + 3 * g
@@ -99,7 +98,7 @@ def dense_newton_A(p, blk, m1):
                 C[o : o + 3, oa : oa + 3] -= sg * kv
                 C[o : o + 3, ob : ob + 3] += sg * kv
             if i == n - 1:
-                M[ob : ob + 3, ob : ob + 3] += p[tb + _L.TT_TIP_M] * np.eye(3)
+                M[ob : ob + 3, ob : ob + 3] += t.tip_mass_kg * np.eye(3)
     Ti = np.linalg.inv(T)
     return Ti @ np.linalg.solve(M, K) @ T, Ti @ np.linalg.solve(M, C) @ T
 
@@ -144,7 +143,7 @@ def structured_vs_dense_lu(p, y, blk_p=None, seed=11, omega=None):
 
     # RADAU5's two shifts at h = 0.5 s: U1/h and (ALPH + i BETA)/h
     blk_p = p if blk_p is None else blk_p
-    m1 = int(blk_p[_L.H_NQT])
+    m1 = ParamView(blk_p).n_qtrans
     blk, f1, f2 = nw.workspace(blk_p)
     assert nw.rod_blocks(y, blk_p, m1, blk) == 0
     aq, av = dense_newton_A(blk_p, blk, m1)

@@ -126,7 +126,7 @@ def test_sigma_form_elements_are_constant_without_perturbation():
     r, v = _kepler_state(20000e3, 0.6, 0.9, 0.4, 1.3, 0.25)
     L = float(np.linalg.norm(r))
     from tetherlab.integrators.driver import integrate
-    from tetherlab.kernel.layout import FORM_DROMO_SIGMA
+    from tetherlab.model.params import FORM_DROMO_SIGMA
 
     scene, _ = _point_mass_scene("dromo")
     from tetherlab.pipeline import prepare
@@ -194,7 +194,7 @@ def test_formulation_validation():
 
 
 def _stiefel_sigma_run(t_out, method="dop853", tol=1e-11, te=dromo.TIME_PHYSICAL):
-    from tetherlab.kernel.layout import FORM_DROMO_SIGMA
+    from tetherlab.model.params import FORM_DROMO_SIGMA
     from tetherlab.pipeline import prepare
 
     scene = load_scene(SCENES / "stiefel-scheifele.toml")
@@ -243,7 +243,7 @@ def test_sigma_clock_agrees_with_the_grid_search(method, te):
     clock, prep = _stiefel_sigma_run(t_out, method, tol=1e-12, te=te)
     mu = prep.mu_m3_s2
     L = float(np.linalg.norm(prep.y0[:3]))
-    from tetherlab.kernel.layout import FORM_DROMO_SIGMA
+    from tetherlab.model.params import FORM_DROMO_SIGMA
 
     pe = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size, te)
     grid = drive._integrate_sigma_grid("dop853", pe, prep.y0[:3], prep.y0[3:6], t_out, 1e-12, 1e-12,
@@ -261,7 +261,7 @@ def test_sigma_clock_reports_a_failure_with_the_rows_before_it(method, te):
     """A step budget that runs out mid-way returns the rows computed so far and says why."""
     res, _ = _stiefel_sigma_run(np.linspace(0.0, 20 * 86400.0, 11), method, te=te)
     full = res.stats["n_accepted"]
-    from tetherlab.kernel.layout import FORM_DROMO_SIGMA
+    from tetherlab.model.params import FORM_DROMO_SIGMA
     from tetherlab.pipeline import prepare
 
     prep = prepare(load_scene(SCENES / "stiefel-scheifele.toml"))
@@ -300,7 +300,7 @@ def test_sigma_rhs_equals_the_sheet_rates_of_the_projected_perturbation(mass_kg)
 
     from tetherlab._jit import ptr
     from tetherlab.kernel.effects import perturbing_body_force
-    from tetherlab.kernel.layout import FORM_DROMO_SIGMA, H_ROOT_M
+    from tetherlab.model.params import FORM_DROMO_SIGMA, ParamView
     from tetherlab.pipeline import prepare
 
     prep = prepare(load_scene(SCENES / "stiefel-scheifele.toml"))
@@ -308,7 +308,7 @@ def test_sigma_rhs_equals_the_sheet_rates_of_the_projected_perturbation(mass_kg)
     L = float(np.linalg.norm(prep.y0[:3]))
     T = math.sqrt(L**3 / mu)
     p = dromo.attach(prep.model.fresh_params(), FORM_DROMO_SIGMA, mu, L, prep.y0.size)
-    p[H_ROOT_M] = mass_kg
+    ParamView(p).root_mass_kg = mass_kg
 
     @njit
     def call(z, sig, p):

@@ -22,7 +22,7 @@ import pytest
 from tests.helpers import SCENES, call_cfunc
 from tetherlab.errors import SceneError
 from tetherlab.formulations import dromo
-from tetherlab.kernel.layout import FORM_DROMO_SIGMA, H_OFF_FORM
+from tetherlab.model.params import FORM_DROMO_SIGMA, ParamView
 from tetherlab.pipeline import prepare, simulate
 from tetherlab.propagation import dromo as drive
 from tetherlab.scene import load_scene
@@ -119,7 +119,7 @@ def test_phi_is_bounded_by_pi_plus_one(e):
 def test_clock_event_has_the_sign_of_the_exact_value_and_equals_it_near_the_root():
     prep, L, states = _states_along_the_orbit()
     _, p_te = _blocks(prep, L)
-    off = int(p_te[H_OFF_FORM])
+    off = ParamView(p_te).formulation_offset
     rng = np.random.default_rng(12)
     n_exact = 0
     for sigma, el in states:

@@ -16,7 +16,7 @@ from scipy.integrate import quad
 from tetherlab.environment import atmosphere, magnetic
 from tetherlab.errors import SceneError
 from tetherlab.forces import EFFECTS, drag, electrodynamic
-from tetherlab.kernel.layout import H_OFF_SCR, SR_R1, SR_R2
+from tetherlab.model.params import ParamView
 from tetherlab.orbits.ed_decay import decay_rate_m_s, decay_time_s, decay_time_with_inclination_s
 from tetherlab.scene import Scene, load_scene
 from tetherlab.system import TetherSpec, build_model, chain_state
@@ -100,11 +100,8 @@ def rod_totals(model, r0, u, strain=0.0):
     h = y.size // 2
     p = model.fresh_params()
     assert rod_forces(0.0, y[:h], y[h:], p) == 0
-    scr = int(p[H_OFF_SCR])
-    from tetherlab.kernel.layout import SR_SIZE
-
-    return np.array([p[scr + g * SR_SIZE + SR_R1 : scr + g * SR_SIZE + SR_R1 + 3]
-                     + p[scr + g * SR_SIZE + SR_R2 : scr + g * SR_SIZE + SR_R2 + 3] for g in range(n)])  # fmt: skip
+    rs = ParamView(p).rod_scratch
+    return rs.r1[:n] + rs.r2[:n]
 
 
 def test_rod_force_is_I_L_cross_B_and_decelerates_a_prograde_orbit():
@@ -181,9 +178,7 @@ def test_drag_force_on_body_and_rod():
     model = build_model(root_mass_kg=1000.0, tethers=ctx["tethers"], effects=[(EFFECTS["drag"], params)],
                         central={"mu_m3_s2": MU_EARTH, "radius_m": R}, root_name="sat")  # fmt: skip
     p = model.fresh_params()
-    from tetherlab.kernel.layout import ET_OFF_PAR, H_OFF_EFF
-
-    par = int(p[int(p[H_OFF_EFF]) + ET_OFF_PAR])
+    par = ParamView(p).effect(0).par_offset
     np.testing.assert_array_equal(p[par : par + len(vals)], vals)
     x = R + 400e3
     v = 7.67e3

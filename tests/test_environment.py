@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from tetherlab.errors import SceneError
+from tetherlab.model.params import ParamView
 
 ROOT = Path(__file__).resolve().parent.parent
 MU_EARTH = 3.986004418e14
@@ -370,7 +371,7 @@ def test_eclipse_switches_the_constant_current_off():
     model = build_model(root_mass_kg=1063.0, tethers=[tet], effects=[(EFFECTS["electrodynamic"], params)],
                         central={"mu_m3_s2": MU_EARTH, "radius_m": R_EARTH}, epoch=EPOCH, duration_s=86400.0)
     p = model.fresh_params()
-    par = int(p[int(p[8]) + 1])
+    par = ParamView(p).effect(0).par_offset
     off = par + int(p[par + 1])
     s = np.array(ephemeris.position(p, off + 3, 0.0))
     u = s / np.linalg.norm(s)
@@ -430,7 +431,7 @@ def test_igrf_degree_one_equals_the_dipole_of_the_epoch_in_the_effect():
     model = build_model(root_mass_kg=1063.0, tethers=[tet], effects=[(EFFECTS["electrodynamic"], params)],
                         central={"mu_m3_s2": MU_EARTH, "radius_m": R_EARTH}, epoch=EPOCH, duration_s=86400.0)
     p = model.fresh_params()
-    par = int(p[int(p[8]) + 1])
+    par = ParamView(p).effect(0).par_offset
     g, h, _, _ = igrf.coefficients_at(igrf.epoch_datetime(EPOCH), 1)
     a = igrf.IGRF_REFERENCE_RADIUS_M
     k = a**3 * np.array([g[1, 1], h[1, 1], g[1, 0]])

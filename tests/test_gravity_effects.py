@@ -21,7 +21,7 @@ from tetherlab.forces import third_body, zonal
 from tetherlab.formulations.cowell import cowell_rhs
 from tetherlab.integrators.driver import integrate
 from tetherlab.kernel.effects import body_force, potential_per_mass
-from tetherlab.kernel.layout import ET_OFF_PAR, ET_SIZE, H_OFF_EFF
+from tetherlab.model.params import ParamView
 from tetherlab.pipeline import simulate
 from tetherlab.scene import Scene
 from tetherlab.system import build_model, tolerance_scales
@@ -137,7 +137,7 @@ def test_potential_gradient_is_minus_the_acceleration(name):
     # rounding ~ 1e-16 r/h ~ 1e-9 relative to the acceleration; bound 1e-7 of |a|.
     model = _model([name])
     p = model.fresh_params()
-    par = int(p[int(p[H_OFF_EFF]) + ET_OFF_PAR])  # parameters of the only effect
+    par = ParamView(p).effect(0).par_offset  # parameters of the only effect
     rng = np.random.default_rng(3)
     for _ in range(20):
         x = rng.normal(size=3)
@@ -184,7 +184,7 @@ def test_chebyshev_fit_matches_skyfield():
         ep = Time(EPOCH, scale="tdb")
         t = np.random.default_rng(1).uniform(0.0, duration, 200)
         for e, body in enumerate(("moon", "sun")):
-            par = int(p[int(p[H_OFF_EFF]) + e * ET_SIZE + ET_OFF_PAR])  # parameters of effect e
+            par = ParamView(p).effect(e).par_offset  # parameters of effect e
             want = (eph[body] - eph["earth"]).at(ts.tdb_jd(ep.jd1, ep.jd2 + t / 86400.0)).position.m
             got = np.array([ephemeris.position(p, par + 1, tk) for tk in t]).T
             err = np.linalg.norm(got - want, axis=0).max()

@@ -31,7 +31,7 @@ from tetherlab import diagnostics as D
 from tetherlab.forces import EFFECTS
 from tetherlab.formulations.cowell import cowell_rhs
 from tetherlab.integrators.driver import integrate
-from tetherlab.kernel import layout as L
+from tetherlab.model.params import ParamView
 from tetherlab.system import TetherSpec, build_model, center_of_mass, chain_state, point_positions, tolerance_scales
 
 from .helpers import MU_EARTH
@@ -53,11 +53,11 @@ rods = st.integers(min_value=1, max_value=3)
 # ------------------------------------------------------------------------------------------------
 def _unequal_masses(model, weights):
     """Spread the tether's mass over its rods in proportion to ``weights`` (total kept)."""
-    off = int(model.p[L.H_OFF_ROD])
+    rods = ParamView(model.p).rods
     w = np.asarray(weights, float)
     w = w / w.sum()
     for g, f in enumerate(w):
-        model.p[off + g * L.RT_SIZE + L.RT_M] = model.tethers[0].mass_kg * f
+        rods[g].mass_kg = model.tethers[0].mass_kg * f
 
 
 def _orbit(kind, n, thetas, phis, strain):

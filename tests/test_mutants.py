@@ -17,7 +17,8 @@ import pytest
 
 from tetherlab import mutants, verify
 from tetherlab.forces import stiefel_moon
-from tetherlab.kernel import layout as L
+from tetherlab.model import params as L
+from tetherlab.model.params import ParamView
 from tetherlab.pipeline import prepare
 from tetherlab.scene import load_scene
 from tetherlab.system import Model
@@ -34,14 +35,12 @@ def test_no_shipped_scene_reaches_a_defect(scene):
     except Exception as exc:  # a scene that cannot load is another test's business
         pytest.skip(f"{scene}: {exc}")
     p = prepare(sc).model.fresh_params()
-    assert p[L.H_MUTANT] == L.MUT_NONE
-    offt = int(p[L.H_OFF_TETH])
-    for k in range(int(p[L.H_NTETH])):
-        assert int(p[offt + k * L.TT_SIZE + L.TT_MODEL]) in (L.MODEL_PAPER, L.MODEL_ENERGY)
-    off = int(p[L.H_OFF_EFF])
-    for e in range(int(p[L.H_NEFF])):
-        if int(p[off + e * L.ET_SIZE + L.ET_CODE]) == stiefel_moon.CODE:
-            assert p[int(p[off + e * L.ET_SIZE + L.ET_OFF_PAR]) + 3] == 1.0  # the indirect term's factor
+    v = ParamView(p)
+    assert v.defect == L.MUT_NONE
+    for t in v.tethers:
+        assert t.model in (L.MODEL_PAPER, L.MODEL_ENERGY)
+    for par in v.effects_with_code(stiefel_moon.CODE):
+        assert p[par + 3] == 1.0  # the indirect term's factor
 
 
 def test_switching_a_defect_on_and_off_leaves_nothing_behind():
@@ -64,9 +63,11 @@ def test_every_active_defect_names_gates_that_exist_and_the_rigid_defects_are_ac
         assert set(m.gates) <= set(GATES), m.name
         if m.status == "active":
             assert m.gates and (m.mutate or m.patch), m.name
-    # the rigid-body defects share the kernel's header slot (kernel/layout.py H_DEFECT = H_MUTANT)
+    # the rigid-body defects and the others share the block's one defect field (kernel/schema.py)
     assert {"rigid_attachment_not_rotated", "rigid_centripetal_dropped"} <= set(mutants.names())
-    assert L.H_MUTANT == L.H_DEFECT
+    p = prepare(load_scene(ROOT / "studies" / "scenes" / "lateral-two-rods.toml")).model.fresh_params()
+    mutants.MUTANTS["rigid_centripetal_dropped"].mutate(p)
+    assert ParamView(p).defect == L.DEFECT_NO_CENTRIPETAL
 
 
 def test_the_rigid_defects_are_credited_only_through_their_control_gate():

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tetherlab.kernel import layout as L
+from tetherlab.model.params import ParamView
 from tetherlab.pipeline import prepare
 from tetherlab.scene import Scene
 from tetherlab.tether import newton as nw
@@ -95,10 +95,10 @@ def test_forest_layout_has_root_blocks_after_the_rods():
     prep = prepare(forest_scene())
     p = prep.model.fresh_params()
     roots = _roots(p)
-    nrods = int(p[L.H_NRODS])
+    nrods = ParamView(p).n_rods
     assert len(roots) == 3 and roots[0][:2] == (0, 0)
     assert sorted(qo for _, qo, _ in roots[1:]) == [3 + 3 * nrods, 6 + 3 * nrods]
-    assert int(p[L.H_NQT]) == 3 * len(roots) + 3 * nrods == prep.y0.size // 2
+    assert ParamView(p).n_qtrans == 3 * len(roots) + 3 * nrods == prep.y0.size // 2
     assert nw.structure_supported(p, prep.y0.size, True) == ""
 
 
@@ -143,9 +143,8 @@ def test_forest_solve_without_the_second_root_disagrees():
     roots = [b for b, _, _ in _roots(p)]
     h2 = names.index("h2")
     bad = p.copy()
-    o = int(p[L.H_OFF_ROOTS])
-    bad[o : o + len(roots)] = [b for b in roots if b != h2] + [h2]
-    bad[L.H_NROOT] = len(roots) - 1
+    ParamView(bad).roots[:] = [b for b in roots if b != h2] + [h2]
+    ParamView(bad).n_roots = len(roots) - 1
     y = _state(prep)
     with np.errstate(all="ignore"):
         rels = _solve_vs_dense(bad, y, blk_p=p)
@@ -159,7 +158,7 @@ def test_structured_and_dense_runs_of_a_forest_agree():
     _assert_runs_agree(prep, runs)
     # and the rod vectors (the stiff part) within 100 tolerance units of the 200 m rods, as
     # tests/test_newton_structured.py's runs
-    nrods = int(prep.model.p[L.H_NRODS])
+    nrods = ParamView(prep.model.p).n_rods
     qa, qb = runs["structured"].y[:, 3 : 3 + 3 * nrods], runs["dense"].y[:, 3 : 3 + 3 * nrods]
     assert np.max(np.abs(qa - qb)) * 2 * SQ3 <= 100 * prep.rtol * 200.0
 

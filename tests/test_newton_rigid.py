@@ -203,10 +203,10 @@ def test_auto_takes_the_bordered_matrix_from_its_rod_count():
         assert desc.startswith(kind) and (p_struct is not None) == (kind == "structured")
     # forests are structured too (tests/test_newton_forest.py); a root count that does not match
     # the state's layout (set to 2 on a copy: q has one root block) is refused with the reason
-    from tetherlab.kernel.layout import H_NROOT
+    from tetherlab.model.params import ParamView
 
     p = prep.model.fresh_params()
-    p[H_NROOT] = 2
+    ParamView(p).n_roots = 2
     assert "is not the Cowell layout" in nw.structure_supported(p, prep.y0.size, m1)
 
 

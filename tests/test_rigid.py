@@ -29,7 +29,8 @@ from scipy.spatial.transform import Rotation
 
 from tetherlab.errors import SceneError
 from tetherlab.formulations.cowell import cowell_rhs_py
-from tetherlab.kernel import layout as L
+from tetherlab.model import params as L
+from tetherlab.model.params import ParamView
 from tetherlab.pipeline import prepare, simulate
 from tetherlab.scene import Scene
 from tetherlab.tether.chain import system_accelerations
@@ -153,13 +154,12 @@ class Numpy:
         self.kidx = {n: i for i, n in enumerate(self.names) if n}
         self.d = self.q[3 : 3 + 3 * self.N].reshape(self.N, 3)
         self.dd = self.qd[3 : 3 + 3 * self.N].reshape(self.N, 3)
-        scr = int(p[L.H_OFF_SCR])
-        offr = int(p[L.H_OFF_ROD])
-        self.rod_m = np.array([p[offr + g * L.RT_SIZE + L.RT_M] for g in range(self.N)])
-        sr = [scr + g * L.SR_SIZE for g in range(self.N)]
-        self.R = np.array([p[s + L.SR_R1 : s + L.SR_R1 + 3] + p[s + L.SR_R2 : s + L.SR_R2 + 3] for s in sr])
-        self.Q = np.array([p[s + L.SR_Q : s + L.SR_Q + 3] for s in sr])
-        self.C = [p[s + L.SR_C] * np.eye(3) + p[s + L.SR_C + 1] * np.outer(p[s + L.SR_U : s + L.SR_U + 3], p[s + L.SR_U : s + L.SR_U + 3]) for s in sr]
+        view = ParamView(p)
+        self.rod_m = view.rods.mass_kg[: self.N].copy()
+        sr = [view.rod_scratch[g] for g in range(self.N)]
+        self.R = np.array([s.r1 + s.r2 for s in sr])
+        self.Q = np.array([s.q for s in sr])
+        self.C = [s.c[0] * np.eye(3) + s.c[1] * np.outer(s.u, s.u) for s in sr]
         # bodies: attitude, then positions root to leaves
         self.Rm, self.wI, self.wb, self.h = {}, {}, {}, {}
         for b, off in m.rigid_index.items():
@@ -446,7 +446,7 @@ def _rates(prep, y, defect=L.DEFECT_NONE):
     independent numpy evaluation of the mass points' accelerations (docs/model.md 6, 12.2).
     Returns the rates and the scales |sum of the terms| they are made of."""
     p = prep.model.fresh_params()
-    p[L.H_DEFECT] = defect
+    ParamView(p).defect = defect
     nqt = prep.model.n_qt
     acc = np.zeros(nqt)
     datt = np.zeros(y.size - 2 * nqt)
@@ -512,7 +512,7 @@ def _rates(prep, y, defect=L.DEFECT_NONE):
             er = w @ Js @ wdot + (ref.h[b] / np.array([wh.inertia_kg_m2 for wh in rs.wheels])) @ hdot if len(rs.wheels) else w @ Js @ wdot
             E_rate += er
             sE += abs(w @ Js @ wdot)
-    offr = int(p[L.H_OFF_ROD])
+    rods = ParamView(p).rods
     for k, t in enumerate(m.tethers):
         sl = m.rod_slices[k]
         A0, vA0 = ref.A[k]
@@ -530,8 +530,8 @@ def _rates(prep, y, defect=L.DEFECT_NONE):
             E_rate += mg * (vG @ aG + dv @ dacc)
             sE += mg * (abs(vG @ aG) + abs(dv @ dacc))
             # elastic power EA L eps eps' (energy model: V = 1/2 EA L eps^2)
-            lu = p[offr + g * L.RT_SIZE + L.RT_LU]
-            ea = p[offr + g * L.RT_SIZE + L.RT_EA]
+            lu = rods[g].length_m
+            ea = rods[g].ea_N
             dn = np.linalg.norm(d)
             eps = 2 * SQ3 * dn / lu - 1
             epsd = 2 * SQ3 * (d @ dv) / (dn * lu)

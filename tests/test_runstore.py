@@ -234,7 +234,7 @@ def _poison_applied_force_after(monkeypatch, t_poison: float):
     effect's fx parameter in the run's parameter block becomes NaN, so the effect itself returns
     a NaN force from then on."""
     from tetherlab import pipeline, system
-    from tetherlab.kernel.layout import ET_CODE, ET_OFF_PAR, ET_SIZE, H_NEFF, H_OFF_EFF
+    from tetherlab.model.params import ParamView
 
     blocks = []
     real_fresh = system.Model.fresh_params
@@ -246,10 +246,8 @@ def _poison_applied_force_after(monkeypatch, t_poison: float):
 
     def update(self, t):
         for p in blocks if t > t_poison else ():  # (the diagnostics build blocks of their own)
-            off = int(p[H_OFF_EFF])
-            for e in range(int(p[H_NEFF])):
-                if int(p[off + e * ET_SIZE + ET_CODE]) == 41:  # forces/applied_force.py CODE
-                    p[int(p[off + e * ET_SIZE + ET_OFF_PAR]) + 1] = float("nan")
+            for par in ParamView(p).effects_with_code(41):  # forces/applied_force.py CODE
+                p[par + 1] = float("nan")
 
     monkeypatch.setattr(system.Model, "fresh_params", fresh)
     monkeypatch.setattr(pipeline._ProgressBar, "update", update)

@@ -80,11 +80,11 @@ def test_orbit_split_is_the_pass_through_and_joins_back():
 
 def test_disagreeing_block_is_reported():
     """Negative control: a parameter block with one offset moved is caught."""
-    from tetherlab.kernel import layout as L
+    from tetherlab.model.params import ParamView
 
     model = _forest_model()
     p = model.p.copy()
-    p[L.H_OFF_WHL] += 1
+    ParamView(p).wheel_state_index += 1
     assert any("H_OFF_WHL" in s for s in model.state.agrees_with(p))
 
 

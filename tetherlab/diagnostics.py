@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from ._jit import njit
+from .model.params import ParamView
 from .bodies.rigid import gravity_gradient_potential, mat_t_vec, mat_vec
 from .kernel.effects import potential_per_mass
 from .kernel.layout import (
@@ -252,7 +253,7 @@ def compute(model, ts: np.ndarray, Y: np.ndarray) -> dict:
     nr = model.n_rods
     nj = nr + len(model.tethers)
     nb = len(model.bodies)
-    nw = int(p[H_NWHEEL])
+    nw = ParamView(p).n_wheels
     glob = np.full((nrows, G_NCOL), np.nan)
     rods = np.full((nrows, nr, 2), np.nan)
     joints = np.full((nrows, nj, 3), np.nan)

@@ -38,7 +38,8 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 
-from .kernel import layout as L
+from .model import params as L
+from .model.params import ParamView
 
 
 @dataclass(frozen=True)
@@ -56,28 +57,19 @@ class Mutant:
 
 
 # -- param defects: edits of the copy of the parameter block -------------------------------------
-def _tethers(p):
-    offt = int(p[L.H_OFF_TETH])
-    return [offt + k * L.TT_SIZE for k in range(int(p[L.H_NTETH]))]
-
-
 def _effects(p, codes):
-    off = int(p[L.H_OFF_EFF])
-    for e in range(int(p[L.H_NEFF])):
-        base = off + e * L.ET_SIZE
-        if int(p[base + L.ET_CODE]) in codes:
-            yield int(p[base + L.ET_OFF_PAR])
+    return ParamView(p).effects_with_code(*codes)
 
 
 def _printed(p):
-    for tb in _tethers(p):  # eq. 20 enters the paper model only (the energy model has no J_2)
-        if int(p[tb + L.TT_MODEL]) == L.MODEL_PAPER:
-            p[tb + L.TT_MODEL] = L.MODEL_PRINTED
+    for t in ParamView(p).tethers:  # eq. 20 enters the paper model only (the energy model has no J_2)
+        if t.model == L.MODEL_PAPER:
+            t.model = L.MODEL_PRINTED
 
 
 def _flag(code):
     def mutate(p):
-        p[L.H_MUTANT] = code
+        ParamView(p).defect = code
 
     return mutate
 
@@ -87,10 +79,10 @@ def _one_node(p):
     from .system import gauss_legendre_halves
 
     nodes, weights = gauss_legendre_halves(1)
-    off = int(p[L.H_OFF_QUAD])
-    p[L.H_NQ] = 1
-    p[off : off + 2] = nodes
-    p[off + 2 : off + 4] = weights
+    v = ParamView(p)
+    v.n_quadrature = 1
+    v.quadrature_nodes[:] = nodes
+    v.quadrature_weights[:] = weights
 
 
 def _j2_sign(p):

@@ -19,16 +19,7 @@ from .forces import effect as effect_spec
 from .formulations.cowell import cowell_rhs
 
 from .kernel.events import event_components, system_events
-from .kernel.layout import (
-    FAIL_TEXT,
-    H_EV_STOP_R,
-    H_FAIL_CODE,
-    H_FAIL_EFFECT,
-    H_FAIL_EFFECT_T,
-    H_FAIL_ROD,
-    H_FAIL_T,
-    H_FAIL_VAL,
-)
+from .model.params import FAIL_TEXT, ParamView
 from .result import Result
 from .system import (
     BodySpec,
@@ -180,7 +171,7 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
                 f"({float(np.linalg.norm(y0[:3])) - scene.central_body.radius_m:.6g} m)",
                 f"{scene.stop.altitude_m:.6g} m",
             )
-    model.p[H_EV_STOP_R] = stop_radius
+    ParamView(model.p).stop_radius_m = stop_radius
     # (a scipy method with events is refused at load: tetherlab/scene/checks.py)
     event_names, event_terminal = event_components(model, stop_radius)
 
@@ -294,29 +285,31 @@ def _failing_effect(p: np.ndarray, code: int) -> str:
     evaluation (kernel/effects.py records it), else ''."""
     from .forces import EFFECTS
 
-    ecode = int(p[H_FAIL_EFFECT])
-    if ecode <= 0 or (code != 0 and p[H_FAIL_EFFECT_T] != p[H_FAIL_T]):
+    rep = ParamView(p).report
+    ecode = rep.fail_effect_code
+    if ecode <= 0 or (code != 0 and rep.fail_effect_time_s != rep.fail_time_s):
         return ""
     names = [name for name, spec in EFFECTS.items() if spec.code == ecode]
     name = names[0] if names else f"code {ecode}"
-    return f" (the effect {name!r} returned a non-finite force at t = {p[H_FAIL_EFFECT_T]:.9g} s)"
+    return f" (the effect {name!r} returned a non-finite force at t = {rep.fail_effect_time_s:.9g} s)"
 
 
 def failure_message(p: np.ndarray, model: Model, status: int, t_end: float, base: str) -> str:
-    code = int(p[H_FAIL_CODE])
+    rep = ParamView(p).report
+    code = rep.fail_code
     if code == 0:
         return base + _failing_effect(p, 0)
-    rod = int(p[H_FAIL_ROD])
+    rod = rep.fail_rod
     where = ""
     if rod >= 0:
         for k, sl in enumerate(model.rod_slices):
             if sl.start <= rod < sl.stop:
                 where = f" in tether {model.tethers[k].name!r}, rod {rod - sl.start + 1} of {sl.stop - sl.start}"
     why = FAIL_TEXT.get(code, f"failure code {code}") + _failing_effect(p, code)
-    detail = f" (strain {p[H_FAIL_VAL]:.6g})" if code == 11 else ""
+    detail = f" (strain {rep.fail_value:.6g})" if code == 11 else ""
     return (
         f"run stopped at t = {t_end:.9g} s: {why}{where}{detail}; "
-        f"last failing evaluation at t = {p[H_FAIL_T]:.9g} s. Outputs up to t = {t_end:.9g} s are kept."
+        f"last failing evaluation at t = {rep.fail_time_s:.9g} s. Outputs up to t = {t_end:.9g} s are kept."
     )
 
 
@@ -426,7 +419,7 @@ def segment_plan(prep: Prepared, p: np.ndarray) -> SegmentPlan:
                            leave, lambda ctx: [ctx[0], *ctx[1].tolist()])  # fmt: skip
     if prep.formulation == "dromo-time":
         from .formulations import dromo
-        from .kernel.layout import FORM_DROMO_TIME
+        from .model.params import FORM_DROMO_TIME
 
         mu = prep.mu_m3_s2
         length_m = float(np.linalg.norm(prep.y0[lay.root_r]))  # L = |r0| (docs/dromo.md section 2)
@@ -527,7 +520,7 @@ def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
     """The sigma form of DROMO (a point mass): its own driver schedules the outputs in physical
     time (propagation/dromo.py); rows [r, v] are Cowell states of the single body."""
     from .formulations import dromo
-    from .kernel.layout import FORM_DROMO_SIGMA
+    from .model.params import FORM_DROMO_SIGMA
     from .propagation import dromo as drive
 
     lay = prep.model.state

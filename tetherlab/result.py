@@ -290,7 +290,7 @@ def _center_of_mass_rows(model, Y):
 
 def _effect_counts(p, model) -> dict:
     from .forces import EFFECTS
-    from .kernel.layout import H_OFF_CNT
+    from .model.params import ParamView
 
-    off = int(p[H_OFF_CNT])
-    return {name: int(p[off + spec.code]) for name, spec in EFFECTS.items()}
+    counts = ParamView(p).counters
+    return {name: int(counts[spec.code]) for name, spec in EFFECTS.items()}

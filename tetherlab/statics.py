@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .forces import applied_force
-from .kernel import layout as L
+from .model.params import MUT_HOLD_1PC, ParamView
 from .system import Model, TetherSpec, build_model
 from .tether.chain import accelerations
 
@@ -90,11 +90,8 @@ def held_model(
 def _force_slot(model: Model) -> int:
     """Index in p of the (fx, fy, fz) of the applied_force acting on the end mass (body 1)."""
     p = model.p
-    off = int(p[L.H_OFF_EFF])
-    for e in range(int(p[L.H_NEFF])):
-        base = off + e * L.ET_SIZE
-        par = int(p[base + L.ET_OFF_PAR])
-        if int(p[base + L.ET_CODE]) == applied_force.CODE and int(p[par + applied_force.PAR_BODY]) == 1:
+    for par in ParamView(p).effects_with_code(applied_force.CODE):
+        if int(p[par + applied_force.PAR_BODY]) == 1:
             return par + applied_force.PAR_F
     raise ValueError(
         "model: expected an applied_force effect on body 1 (the end mass) to carry the holding "
@@ -231,14 +228,12 @@ def solve(
         )
     evaluate(x)  # leaves the reactions of the solution in the scratch area of p
     hold = p[slot : slot + 3].copy()
-    if p[L.H_MUTANT] == L.MUT_HOLD_1PC:  # tetherlab.mutants' negative control only, never a user's
+    v = ParamView(p)
+    if v.defect == MUT_HOLD_1PC:  # tetherlab.mutants' negative control only, never a user's
         hold *= 1.01
-    nr = model.n_rods
-    scr = int(p[L.H_OFF_SCR])
-    jscr = scr + nr * L.SR_SIZE
-    reactions = np.array([p[jscr + k * L.SJ_SIZE + L.SJ_J : jscr + k * L.SJ_SIZE + L.SJ_J + 3] for k in range(n + 1)])
-    fe = np.array([p[scr + g * L.SR_SIZE + L.SR_FE] for g in range(n)])
-    eps = np.array([p[scr + g * L.SR_SIZE + L.SR_EPS] for g in range(n)])
+    reactions = v.joint_scratch.j_N[: n + 1].copy()
+    fe = v.rod_scratch.fe[:n].copy()
+    eps = v.rod_scratch.eps[:n].copy()
     d = q[3:].reshape(n, 3).copy()
     joints = r0 + np.concatenate([np.zeros((1, 3)), np.cumsum(2.0 * SQ3 * d, axis=0)])
     y = np.concatenate([q.copy(), np.zeros(h)])

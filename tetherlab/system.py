@@ -1,8 +1,9 @@
 """From validated SI values to the compiled model: the parameter block, the state layout, the
 initial state and the per-component tolerance scales.
 
-This is the only place that knows both the boundary objects and the kernel layout
-(``tetherlab/kernel/layout.py``).  Nothing here is called per right-hand-side evaluation.
+This is the only place that knows both the boundary objects and the parameter block, which it
+writes through the schema's typed view (``tetherlab/model/params.py``).  Nothing here is called
+per right-hand-side evaluation.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from .forces.registry import EffectSpec
-from .kernel import layout as L
+from .model import params as P
 from .model import topology
 
 SQ3 = np.sqrt(3.0)
@@ -109,7 +110,7 @@ class Model:
     @property
     def n_qt(self) -> int:
         """Length of q_trans (the second-order part: y = [q_trans, q_trans', attitude, wheels])."""
-        return int(self.p[L.H_NQT])
+        return P.ParamView(self.p).n_qtrans
 
     @property
     def has_attitude(self) -> bool:
@@ -117,27 +118,25 @@ class Model:
 
     def root_offset(self, b: int) -> int:
         """Index in q_trans of root body b's position."""
-        return int(self.p[int(self.p[L.H_OFF_BODY]) + b * L.BT_SIZE + L.BT_QOFF])
+        return P.ParamView(self.p).body(b).qtrans_index
 
     @property
     def n_rods(self) -> int:
-        return int(self.p[L.H_NRODS])
+        return P.ParamView(self.p).n_rods
 
     @property
     def n_state(self) -> int:
-        return int(self.p[L.H_NSTATE])
+        return P.ParamView(self.p).n_state
 
     def fresh_params(self) -> np.ndarray:
         """A copy of the parameter block (the kernel writes scratch and counters into it)."""
         return self.p.copy()
 
     def rod_masses(self) -> np.ndarray:
-        off = int(self.p[L.H_OFF_ROD])
-        return self.p[off + L.RT_M : off + self.n_rods * L.RT_SIZE : L.RT_SIZE].copy()
+        return P.ParamView(self.p).rods.mass_kg.copy()
 
     def rod_lengths(self) -> np.ndarray:
-        off = int(self.p[L.H_OFF_ROD])
-        return self.p[off + L.RT_LU : off + self.n_rods * L.RT_SIZE : L.RT_SIZE].copy()
+        return P.ParamView(self.p).rods.length_m.copy()
 
     def total_mass(self) -> float:
         return sum(b.mass_kg for b in self.bodies if not b.fixed) + sum(t.mass_kg for t in self.tethers)
@@ -154,11 +153,11 @@ def gauss_legendre_halves(nq: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _hot_slots() -> dict:
-    """Effect code -> header slot of its parameter offset, for the point-mass effects that
+    """Effect code -> header field of its parameter offset, for the point-mass effects that
     kernel/effects.py::_body_force evaluates without walking the effect table."""
     from .forces import central_gravity, stiefel_moon, zonal
 
-    return {central_gravity.CODE: L.H_PAR_CG, zonal.CODE_J2: L.H_PAR_J2, stiefel_moon.CODE: L.H_PAR_SMOON}
+    return {central_gravity.CODE: "central_gravity_par", zonal.CODE_J2: "j2_par", stiefel_moon.CODE: "stiefel_moon_par"}
 
 
 _HOT_SLOTS = _hot_slots()
@@ -176,7 +175,7 @@ def build_model(
     epoch: str | None = None,
     duration_s: float | None = None,
     bodies: list[BodySpec] | None = None,
-    defect: int = L.DEFECT_NONE,
+    defect: int = P.DEFECT_NONE,
     graph=None,
 ) -> Model:
     """Pack the parameter block.  Inputs are SI floats that the scene layer has validated.
@@ -222,109 +221,87 @@ def build_model(
     eff_params: list[list[float]] = [
         list(spec.pack(params, central, ctx)) if spec.pack else [] for spec, params in effects
     ]
-    sizes = {
-        "eff": len(effects) * L.ET_SIZE + sum(len(x) for x in eff_params),
-        "teth": nteth * L.TT_SIZE,
-        "rod": nrods * L.RT_SIZE,
-        "quad": 4 * quadrature,
-        "cnt": L.N_EFFECT_CODES,
-        # rod scratch, joint scratch (n+1 joints per tether)
-        "scr": nrods * L.SR_SIZE + (nrods + nteth) * L.SJ_SIZE,
-        "body": nbody * L.BT_SIZE,
-        "order": nteth,
-        "roots": len(roots),
-        "wt": len(wheels) * L.WT_SIZE + sum(2 * len(w.times_s) for _, w in wheels),
-        "bscr": nbody * L.BS_SIZE + nteth * L.TS_SIZE + len(wheels) * L.WS_SIZE + 72,
-        "rest": 2 * sum(1 for spec, _ in effects if spec.code not in _HOT_SLOTS),
-    }
-    offs = {}
-    pos = L.H_SIZE
-    for key in ("eff", "teth", "rod", "quad", "cnt", "scr", "body", "order", "roots", "wt", "bscr", "rest"):
-        offs[key] = pos
-        pos += sizes[key]
-    p = np.zeros(pos)
-    p[L.H_LEN] = pos
-    p[L.H_NSTATE] = n_state
-    p[L.H_FORM] = L.FORM_COWELL
-    p[L.H_NRODS] = nrods
-    p[L.H_NTETH] = nteth
-    p[L.H_ROOT_INV_M] = 0.0 if root_fixed else 1.0 / root_mass_kg
-    p[L.H_ROOT_M] = 0.0 if root_fixed else root_mass_kg
-    p[L.H_NEFF] = len(effects)
-    p[L.H_OFF_EFF] = offs["eff"]
-    p[L.H_OFF_TETH] = offs["teth"]
-    p[L.H_OFF_ROD] = offs["rod"]
-    p[L.H_OFF_QUAD] = offs["quad"]
-    p[L.H_NQ] = quadrature
-    p[L.H_OFF_SCR] = offs["scr"]
-    p[L.H_OFF_CNT] = offs["cnt"]
-    p[L.H_FAIL_ROD] = -1
-    p[L.H_MIN_STRAIN] = MIN_STRAIN
-    p[L.H_NQT] = nqt
-    p[L.H_OFF_ATT] = 2 * nqt
-    p[L.H_NRIGID] = len(rigid)
-    p[L.H_OFF_WHL] = 2 * nqt + 7 * len(rigid)
-    p[L.H_NWHEEL] = len(wheels)
-    p[L.H_NBODY] = nbody
-    p[L.H_OFF_BODY] = offs["body"]
-    p[L.H_OFF_ORDER] = offs["order"]
-    p[L.H_OFF_WT] = offs["wt"]
-    p[L.H_OFF_BSCR] = offs["bscr"]
-    p[L.H_NROOT] = len(roots)
-    p[L.H_OFF_ROOTS] = offs["roots"]
-    p[L.H_DEFECT] = defect
+    wheel_table_floats = sum(2 * len(w.times_s) for _, w in wheels)
+    n_rest = sum(1 for spec, _ in effects if spec.code not in _HOT_SLOTS)
+    dims = P.dims_of(
+        n_rods=nrods, n_tethers=nteth, n_bodies=nbody, n_wheels=len(wheels), n_effects=len(effects),
+        n_effect_pars=sum(len(x) for x in eff_params), n_quadrature=quadrature, n_roots=len(roots), n_rest=n_rest,
+        n_wheel_table_floats=wheel_table_floats,
+    )
+    offs, length = P.block_offsets(dims)
+    p = np.zeros(length)
+    P.write_table_offsets(p, offs)
+    v = P.ParamView(p)
+    v.block_length = length
+    v.n_state = n_state
+    v.formulation = P.FORM_COWELL
+    v.n_rods = nrods
+    v.n_tethers = nteth
+    v.root_inv_mass_1_kg = 0.0 if root_fixed else 1.0 / root_mass_kg
+    v.root_mass_kg = 0.0 if root_fixed else root_mass_kg
+    v.n_effects = len(effects)
+    v.n_quadrature = quadrature
+    v.fail_rod = -1
+    v.min_strain = MIN_STRAIN
+    v.n_qtrans = nqt
+    v.attitude_index = 2 * nqt
+    v.n_rigid = len(rigid)
+    v.wheel_state_index = 2 * nqt + 7 * len(rigid)
+    v.n_wheels = len(wheels)
+    v.n_bodies = nbody
+    v.n_roots = len(roots)
+    v.defect = defect
     # the gravity-gradient torque acts where central_gravity acts (docs/model.md section 12)
-    p[L.H_MU_GG] = central["mu_m3_s2"] if any(spec.name == "central_gravity" for spec, _ in effects) else 0.0
-    p[offs["roots"] : offs["roots"] + len(roots)] = roots
+    v.mu_gg_m3_s2 = central["mu_m3_s2"] if any(spec.name == "central_gravity" for spec, _ in effects) else 0.0
+    v.roots[:] = roots
 
-    # effect table, parameters after the table; the body-force slots (layout H_PAR_CG ...)
-    par = offs["eff"] + len(effects) * L.ET_SIZE
+    # effect table, parameters after the table; the body-force fields (central_gravity_par ...)
+    par = v.part_offset("effects", "pars")
     for slot in _HOT_SLOTS.values():
-        p[slot] = -1
+        setattr(v, slot, -1)
+    v.n_rest = n_rest
+    rest = v.rest
     n_rest = 0
     for e, ((spec, _), vals) in enumerate(zip(effects, eff_params)):
-        base = offs["eff"] + e * L.ET_SIZE
-        p[base + L.ET_CODE] = spec.code
-        p[base + L.ET_OFF_PAR] = par
-        p[base + L.ET_NPAR] = len(vals)
+        tv = v.effect(e)
+        tv.code = spec.code
+        tv.par_offset = par
+        tv.n_par = len(vals)
         p[par : par + len(vals)] = vals
         if spec.code in _HOT_SLOTS:
-            p[_HOT_SLOTS[spec.code]] = par
+            setattr(v, _HOT_SLOTS[spec.code], par)
         else:
-            p[offs["rest"] + 2 * n_rest] = spec.code
-            p[offs["rest"] + 2 * n_rest + 1] = par
+            rest[n_rest] = spec.code, par
             n_rest += 1
         par += len(vals)
-    p[L.H_NREST] = n_rest
-    p[L.H_OFF_REST] = offs["rest"]
 
     rod_slices = []
     g = 0
     for k, t in enumerate(tethers):
-        base = offs["teth"] + k * L.TT_SIZE
-        p[base + L.TT_NRODS] = t.rods
-        p[base + L.TT_ROD0] = g
-        p[base + L.TT_TIP_INV_M] = 1.0 / t.tip_mass_kg if t.tip_mass_kg > 0 else 0.0
-        p[base + L.TT_TIP_M] = t.tip_mass_kg
-        p[base + L.TT_MODEL] = {"paper": L.MODEL_PAPER, "energy": L.MODEL_ENERGY, "printed": L.MODEL_PRINTED}[t.model]
-        p[base + L.TT_TENSION_ONLY] = 1.0 if t.tension_only else 0.0
-        p[base + L.TT_PARENT] = index[t.parent]
-        p[base + L.TT_CHILD] = 1 + k if bodies[1 + k].name and bodies[1 + k].mass_kg > 0 else -1
-        p[base + L.TT_PA : base + L.TT_PA + 3] = t.from_point_m
+        tv = v.tether(k)
+        tv.n_rods = t.rods
+        tv.rod0 = g
+        tv.tip_inv_mass_1_kg = 1.0 / t.tip_mass_kg if t.tip_mass_kg > 0 else 0.0
+        tv.tip_mass_kg = t.tip_mass_kg
+        tv.model = {"paper": P.MODEL_PAPER, "energy": P.MODEL_ENERGY, "printed": P.MODEL_PRINTED}[t.model]
+        tv.tension_only = 1.0 if t.tension_only else 0.0
+        tv.parent = index[t.parent]
+        tv.child = 1 + k if bodies[1 + k].name and bodies[1 + k].mass_kg > 0 else -1
+        tv.parent_point_m = t.from_point_m
         rod_slices.append(slice(g, g + t.rods))
         for _ in range(t.rods):
-            rb = offs["rod"] + g * L.RT_SIZE
+            rv = v.rod(g)
             # equal rods: each has L_u/n and m_t/n (paper section 2.2 allows any split)
-            p[rb + L.RT_M] = t.mass_kg / t.rods
-            p[rb + L.RT_LU] = t.length_m / t.rods
-            p[rb + L.RT_EA] = t.ea_n
-            p[rb + L.RT_D] = t.damping_n_s
-            p[rb + L.RT_TETH] = k
+            rv.mass_kg = t.mass_kg / t.rods
+            rv.length_m = t.length_m / t.rods
+            rv.ea_N = t.ea_n
+            rv.damping_N_s = t.damping_n_s
+            rv.tether = k
             g += 1
 
     nodes, weights = gauss_legendre_halves(quadrature)
-    p[offs["quad"] : offs["quad"] + 2 * quadrature] = nodes
-    p[offs["quad"] + 2 * quadrature : offs["quad"] + 4 * quadrature] = weights
+    v.quadrature_nodes[:] = nodes
+    v.quadrature_weights[:] = weights
 
     # bodies: parents, elimination order (leaves first), attitude and wheel blocks
     parent_tether = {1 + k: k for k in range(nteth)}
@@ -337,31 +314,30 @@ def build_model(
     wheel_index = {}
     att = 2 * nqt
     whl = 2 * nqt + 7 * len(rigid)
-    wt = offs["wt"]
-    tab = wt + len(wheels) * L.WT_SIZE
+    tab = v.part_offset("wheels", "tables")
     extra = 3 * (1 + nrods)
     for b, body in enumerate(bodies):
-        bt = offs["body"] + b * L.BT_SIZE
+        bv = v.body(b)
         fixed = body.fixed or not body.mass_kg > 0
-        p[bt + L.BT_M] = 0.0 if fixed else body.mass_kg
-        p[bt + L.BT_INV_M] = 0.0 if fixed else 1.0 / body.mass_kg
-        p[bt + L.BT_QOFF] = 0 if b == 0 else (extra + 3 * (b - 1 - nteth) if b > nteth else -1)
-        p[bt + L.BT_PARENT] = parent_tether.get(b, -1)
-        p[bt + L.BT_AOFF] = -1
-        p[bt + L.BT_NCHILD] = sum(1 for t in tethers if t.parent == body.name and body.name)
+        bv.mass_kg = 0.0 if fixed else body.mass_kg
+        bv.inv_mass_1_kg = 0.0 if fixed else 1.0 / body.mass_kg
+        bv.qtrans_index = 0 if b == 0 else (extra + 3 * (b - 1 - nteth) if b > nteth else -1)
+        bv.parent = parent_tether.get(b, -1)
+        bv.attitude_index = -1
+        bv.n_children = sum(1 for t in tethers if t.parent == body.name and body.name)
         if 1 <= b <= nteth:
-            p[bt + L.BT_PT : bt + L.BT_PT + 3] = tethers[b - 1].to_point_m
+            bv.child_point_m = tethers[b - 1].to_point_m
         if body.rigid is None:
             continue
         rs = body.rigid
-        p[bt + L.BT_RIGID] = 1.0
-        p[bt + L.BT_AOFF] = att
+        bv.rigid = 1.0
+        bv.attitude_index = att
         rigid_index[b] = att
         att += 7
         JB = np.asarray(rs.inertia_kg_m2, float)
         JS = JB.copy()
-        p[bt + L.BT_W0] = len(wheel_index)
-        p[bt + L.BT_NW] = len(rs.wheels)
+        bv.wheel0 = len(wheel_index)
+        bv.n_wheels = len(rs.wheels)
         ctrl = [w for w in rs.wheels if w.mode == "control"]
         pinv = np.linalg.pinv(np.array([w.axis for w in ctrl], float).T) if ctrl else None
         for w in rs.wheels:
@@ -369,31 +345,31 @@ def build_model(
             wheel_index[(b, w.name)] = whl + j
             a = np.asarray(w.axis, float)
             JS -= w.inertia_kg_m2 * np.outer(a, a)
-            wb = wt + j * L.WT_SIZE
-            p[wb + L.WT_BODY] = b
-            p[wb + L.WT_AX : wb + L.WT_AX + 3] = a
-            p[wb + L.WT_I] = w.inertia_kg_m2
-            p[wb + L.WT_MODE] = {"constant": L.WMODE_CONST, "table": L.WMODE_TABLE, "control": L.WMODE_CONTROL}[w.mode]
-            p[wb + L.WT_TAU] = w.torque_N_m
-            p[wb + L.WT_MAXW] = w.max_speed_rad_s
-            p[wb + L.WT_MAXT] = w.max_torque_N_m
+            wv = v.wheel(j)
+            wv.body = b
+            wv.axis = a
+            wv.inertia_kg_m2 = w.inertia_kg_m2
+            wv.mode = {"constant": P.WMODE_CONST, "table": P.WMODE_TABLE, "control": P.WMODE_CONTROL}[w.mode]
+            wv.torque_N_m = w.torque_N_m
+            wv.max_speed_rad_s = w.max_speed_rad_s
+            wv.max_torque_N_m = w.max_torque_N_m
             if w.mode == "table":
                 nt = len(w.times_s)
-                p[wb + L.WT_TOFF] = tab
-                p[wb + L.WT_TN] = nt
+                wv.table_offset = tab
+                wv.table_points = nt
                 p[tab : tab + nt] = w.times_s
                 p[tab + nt : tab + 2 * nt] = w.values_N_m
                 tab += 2 * nt
             if w.mode == "control":
-                p[wb + L.WT_PINV : wb + L.WT_PINV + 3] = pinv[ctrl.index(w)]
-        p[bt + L.BT_JS : bt + L.BT_JS + 9] = JS.ravel()
-        p[bt + L.BT_JB : bt + L.BT_JB + 9] = JB.ravel()
+                wv.pinv_row = pinv[ctrl.index(w)]
+        bv.js_kg_m2 = JS.ravel()
+        bv.jb_kg_m2 = JB.ravel()
         if rs.control is not None:
             c = rs.control
-            p[bt + L.BT_CTRL] = L.CTRL_ORBIT if c.target == "orbit" else L.CTRL_INERTIAL
-            p[bt + L.BT_KP] = c.kp_N_m
-            p[bt + L.BT_KD] = c.kd_N_m_s
-            p[bt + L.BT_QT : bt + L.BT_QT + 4] = c.quaternion
+            bv.control = P.CTRL_ORBIT if c.target == "orbit" else P.CTRL_INERTIAL
+            bv.kp_N_m = c.kp_N_m
+            bv.kd_N_m_s = c.kd_N_m_s
+            bv.target_quaternion = c.quaternion
 
     model = Model(
         p=p,

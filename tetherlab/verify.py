@@ -172,14 +172,13 @@ def free_space_case(kind: str, n: int, damping_n_s: float = 0.0):
     """docs/model.md 6.3's free-space scenario (studies/model_properties.py free_case): root 50 kg,
     tip 20 kg, 100 m tether of 5 kg, EA 1 kN, rods bent out of line, translating and spinning,
     1 % initial stretch (5 J), rod masses 1 : 1.5 : 2 : 2.5; optionally damped."""
-    from .kernel import layout as L
+    from .model.params import ParamView
     from .system import TetherSpec, build_model, chain_state
 
     m = build_model(root_mass_kg=50.0, tethers=[TetherSpec("t", n, 100.0, 1e3, 5.0, damping_n_s, kind, 20.0, "tip")],
                     effects=[], central={})  # fmt: skip
     w = np.array([1.0, 1.5, 2.0, 2.5])[:n]
-    off = int(m.p[L.H_OFF_ROD])
-    m.p[off + L.RT_M : off + n * L.RT_SIZE : L.RT_SIZE] = 5.0 * w / w.sum()
+    ParamView(m.p).rods.mass_kg = 5.0 * w / w.sum()
     dirs = np.array([[1, 0, 0], [0.8, 0.6, 0], [0.6, 0.8, 0.1], [0.3, 0.9, 0.3]][:n], float)
     y0 = chain_state(m, np.zeros(3), np.array([0.3, -0.2, 0.1]), [dirs], [0.01], np.array([0.0, 0.02, 0.05]))
     return m, y0

@@ -62,7 +62,7 @@ def runner(formulation: str, method: str, tol: float, case: str = "ex2"):
     from ..propagation import dromo as drive
     from ..formulations.cowell import cowell_rhs
     from ..integrators.driver import integrate
-    from ..kernel.layout import FORM_DROMO_SIGMA
+    from ..model.params import FORM_DROMO_SIGMA
     from ..pipeline import prepare
     from ..scene import load_scene
 

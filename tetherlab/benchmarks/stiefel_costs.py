@@ -77,7 +77,7 @@ def _rhs_probe(case: str, n_calls: int = 20_000, time_element: str = "none"):
     """A zero-argument function making n_calls chained DROMO sigma rhs calls with the case's
     effects (and the sigma form's time variable), and n_calls."""
     from ..formulations import dromo
-    from ..kernel.layout import FORM_DROMO_SIGMA
+    from ..model.params import FORM_DROMO_SIGMA
     from ..pipeline import prepare
     from ..scene import load_scene
 
