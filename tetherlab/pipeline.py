@@ -787,6 +787,7 @@ def _integrate_cowell_orbit(prep: Prepared, p: np.ndarray, progress):
 
     from .formulations import cowell_orbit as co
     from .integrators.driver import integrate
+    from .tether.newton_solver import choose as choose_newton
 
     nqt = prep.model.n_qt
     t_out = prep.t_out
@@ -814,7 +815,8 @@ def _integrate_cowell_orbit(prep: Prepared, p: np.ndarray, progress):
         co.set_frame(pe, omega, t_a)
         res = integrate(prep.method, co.cowell_orbit_rhs, t_a, co.to_frame(0.0, y_in, omega, nqt), seg_t, pe,
                         prep.rtol, prep.atol, h_max=prep.h_max, max_steps=budget, progress=progress,
-                        second_order=True, **_event_args(prep))  # fmt: skip
+                        second_order=True, newton=choose_newton(pe, y_in.size, True),
+                        **_event_args(prep))  # fmt: skip
         for key, v in res.stats.items():
             if isinstance(v, (int, float)) and not isinstance(v, bool):
                 sums[key] = sums.get(key, 0) + v
@@ -868,7 +870,11 @@ def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
 def _integrate_cowell(prep: Prepared, p: np.ndarray, progress, **store):
     """``store``: y_out, checkpoint, restart for runs written as they go (tetherlab/runstore.py)."""
     from .integrators.driver import integrate
+    from .tether.newton_solver import choose as choose_newton
 
+    # Cowell: y = [q, q', attitude, wheels] with q' exact for the first NQT components (the
+    # state-layout descriptor): RADAU5 reduces its Newton systems to n - NQT unknowns
+    second_order = True if not prep.model.has_attitude else prep.model.n_qt
     return integrate(
         prep.method,
         cowell_rhs,
@@ -881,9 +887,8 @@ def _integrate_cowell(prep: Prepared, p: np.ndarray, progress, **store):
         h_max=prep.h_max,
         max_steps=prep.max_steps,
         progress=progress,
-        # Cowell: y = [q, q', attitude, wheels] with q' exact for the first NQT components (the
-        # state-layout descriptor): RADAU5 reduces its Newton systems to n - NQT unknowns
-        second_order=True if not prep.model.has_attitude else prep.model.n_qt,
+        second_order=second_order,
+        newton=choose_newton(p, prep.y0.size, second_order),  # the model's Newton matrix for RADAU5
         **_event_args(prep),
         **store,
     )
