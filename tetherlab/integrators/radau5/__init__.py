@@ -30,8 +30,11 @@ neither the steps nor the result.
 Files, one concept each: ``constants`` (tableau scalars, Hairer's defaults, tuned values,
 workspace slots), ``workspace``, ``dense`` (finite-difference Jacobian, LU, reduced systems),
 ``border`` (the Schur complement on the first-order unknowns), ``newton`` (the Newton iteration's
-linear solve and its round-off floor), ``core`` (the step loop: Newton iteration, error estimate,
-controller, events, dense output).
+linear solve and its round-off floor), ``controller`` (step ratios: error estimate, Gustafsson,
+Newton-rate cap, slow Newton), ``core`` (the step loop: the Newton iteration itself, the error
+estimate, events, dense output; kept in one function because its pieces share some thirty arrays
+and the handed-in cfuncs, and numba warns on a tuple holding a cfunc, which a compiled call of
+more than 30 arguments builds).
 """
 
 from __future__ import annotations
@@ -69,6 +72,7 @@ from .constants import (  # noqa: F401  (workspace slots, read by tests and the 
     _I_STARTED,
     _I_STRUCT,
 )
+from .controller import error_quotient, gustafsson_quotient, newton_rate_cap, newton_slow_factor
 from .core import _collocation, radau5_core, radau5_run
 from .dense import _decompose, _jacobian, _solve, lu_factor, lu_solve
 from .newton import _increment_noise, _lin

@@ -48,8 +48,6 @@ from .constants import (
     DD1,
     DD2,
     DD3,
-    FACL,
-    FACR,
     MAX_SINGULAR,
     NIT,
     QUOT1,
@@ -94,6 +92,7 @@ from .constants import (
     _I_STARTED,
     _I_STRUCT,
 )
+from .controller import error_quotient, gustafsson_quotient, newton_rate_cap, newton_slow_factor
 from .dense import _decompose, _jacobian
 from .newton import _increment_noise, _lin
 from .workspace import radau5_workspace
@@ -443,8 +442,7 @@ def radau5_core(
                     faccon = theta / (1.0 - theta)
                     dyth = faccon * dyno * theta ** (nit - 1 - newt) / fnewt
                     if dyth >= 1.0 and not fixed_step:
-                        qnewt = max(1e-4, min(20.0, dyth))
-                        hhfac = 0.8 * qnewt ** (-1.0 / (4.0 + nit - 1 - newt))
+                        hhfac = newton_slow_factor(dyth, nit, newt)
                         stalled = True
                         fail = 11
                 else:
@@ -548,8 +546,7 @@ def radau5_core(
                 h = 0.25 * h
                 need_jac = not caljac
                 continue
-            fac = min(SAFE, cfac / (newt + 2 * nit))
-            quot = max(FACR, min(FACL, err**0.25 / fac))
+            quot = error_quotient(err, newt, nit, cfac)
         hnew = h / quot
 
         if err < 1.0:
@@ -639,16 +636,14 @@ def radau5_core(
             if not fixed_step:
                 # Predictive controller of Gustafsson (RADAU5, PRED = true).
                 if naccpt > 1:
-                    facgus = (hacc / h) * (err * err / erracc) ** 0.25 / SAFE
-                    facgus = max(FACR, min(FACL, facgus))
-                    quot = max(quot, facgus)
+                    quot = gustafsson_quotient(quot, h, hacc, err, erracc)
                     hnew = h / quot
                 hacc = h
                 erracc = max(1e-2, err)
                 if newt >= 2 and fresh_jac and thstep > 0.0 and not at_floor:
                     # Newton-rate cap (THETA_STEP): a fresh Jacobian's rate grows like h^2 here
                     # (not after an iteration stopped at its round-off floor: its rate is noise)
-                    hnew = min(hnew, h * np.sqrt(thstep / theta))
+                    hnew = newton_rate_cap(hnew, h, thstep, theta)
             hold = h
             t = xph
             for i in range(n):
