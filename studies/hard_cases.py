@@ -285,7 +285,7 @@ def printed_negative_control(paper_tight: dict, fname: str = "hard-massratio-sma
     """The H bound must see a model that does not conserve H: eq. 20 as printed (the transverse
     inertia's sign, docs/model.md 6.1) on the mf/m0 = 1e-4 case, whose rods bend (a rod's own
     mass dominates), at the tight tolerance.  Scenes refuse the printed model (evidence only), so
-    the kernel flag is switched as in tetherlab/verify.py::check_invariants.  The bound is
+    the kernel flag is switched as in tetherlab/verify/checks.py::check_invariants.  The bound is
     B_H for this run's steps with the scales of the paper model's run ``paper_tight``."""
     import numpy as np
 
@@ -300,8 +300,11 @@ def printed_negative_control(paper_tight: dict, fname: str = "hard-massratio-sma
     sc = load_scene(SCENES / fname).replace(**{"integrator.rtol": tol, "integrator.atol": tol})
     prep = prepare(sc)
     ParamView(prep.model.p).tether(0).model = MODEL_PRINTED
-    r = integrate(sc.integrator.method, cowell_rhs, 0.0, prep.y0, prep.t_out, prep.model.fresh_params(),
-                  prep.rtol, prep.atol, second_order=True)  # fmt: skip
+    from tetherlab.tether.newton_solver import choose
+
+    p = prep.model.fresh_params()
+    r = integrate(sc.integrator.method, cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol,
+                  second_order=True, newton=choose(p, prep.y0.size, True))  # fmt: skip
     g = D.compute(prep.model, r.t, r.y)["global"]
     H = g[:, D.G_HX : D.G_HZ + 1]
     dh = float(np.linalg.norm(H - H[0], axis=1).max()) / own_angular_momentum_scale(sc)[0]

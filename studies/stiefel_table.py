@@ -30,7 +30,7 @@ CASES = (("cowell", "dop853"), ("cowell", "vern9"), ("cowell", "radau5"), ("drom
          ("dromo", "vern9"), ("dromo", "radau5"), ("dromo", "abm"))
 #: Example 1 (J2 only, references/stiefel/example1.json): the sigma form with tau and with the linear time
 #: element ("dromo+te", docs/dromo.md section 11), rows "ex1 tetherlab ..."; the gate
-#: stiefel_example1_te_error reads the dromo+te abm row at 1e-11 (tetherlab/verify.py)
+#: stiefel_example1_te_error reads the dromo+te abm row at 1e-11 (tetherlab/verify/studies.py, _stiefel_gates)
 EX1_CASES = (("dromo", "vern9"), ("dromo+te", "vern9"), ("dromo+te", "abm"))
 EX1_TOLS = tuple(10.0**-k for k in range(8, 14))
 

@@ -109,11 +109,14 @@ def dense_and_structured_runs(prep, m1):
     from tetherlab.integrators.driver import integrate
     from tetherlab.pipeline import _event_args
 
+    from tetherlab.tether.newton_solver import choose
+
     runs = {}
     for kind in ("dense", "structured"):
-        runs[kind] = integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, prep.model.fresh_params(), prep.rtol,
-                               prep.atol, h_max=prep.h_max, max_steps=prep.max_steps, second_order=m1,
-                               newton=kind, **_event_args(prep))  # fmt: skip
+        p = prep.model.fresh_params()
+        runs[kind] = integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol,
+                               h_max=prep.h_max, max_steps=prep.max_steps, second_order=m1,
+                               newton=choose(p, prep.y0.size, m1, kind), **_event_args(prep))  # fmt: skip
         assert runs[kind].status == 0, runs[kind].message
     assert runs["structured"].stats["newton_matrix"] == "structured"
     assert runs["dense"].stats["newton_matrix"] == "dense (requested)"

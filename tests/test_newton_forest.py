@@ -176,13 +176,13 @@ def test_forest_with_rigid_roots_takes_the_bordered_matrix(h2_rigid):
 
 
 def test_auto_takes_the_structured_path_for_a_forest():
-    # driver.AUTO_STRUCTURED_MIN_RODS: the structured path from that many rods in all
-    from tetherlab.integrators import driver
+    # newton_solver.AUTO_STRUCTURED_MIN_RODS: the structured path from that many rods in all
+    from tetherlab.tether import newton_solver
 
-    nmin = driver.AUTO_STRUCTURED_MIN_RODS
+    nmin = newton_solver.AUTO_STRUCTURED_MIN_RODS
     for total, kind in ((nmin - 1, "dense"), (nmin, "structured")):
         rods = (1, 1, total - 2)
         prep = prepare(forest_scene(rods=rods))
         p = prep.model.fresh_params()
-        desc, p_struct = driver._newton_choice("radau5", "auto", p, prep.y0.size, True)
-        assert desc.startswith(kind) and (p_struct is not None) == (kind == "structured"), desc
+        solver = newton_solver.choose(p, prep.y0.size, True)
+        assert solver.name.startswith(kind) and solver.structured == (kind == "structured"), solver.name

@@ -27,6 +27,7 @@ from tetherlab.integrators.driver import integrate
 from tetherlab.pipeline import prepare
 from tetherlab.scene import load_scene
 from tetherlab.tether import newton as nw
+from tetherlab.tether.newton_solver import KERNELS, choose
 
 from tests.helpers import assert_runs_agree, dense_and_structured_runs
 from tests.helpers import ROOT
@@ -123,12 +124,14 @@ def _bordered(prep, y, drop_bw=False):
         bs = np.zeros((nb, nb), dtype=fac.dtype)
         bp = np.zeros(nb, dtype=np.int64)
         assert nw.factor(p, blk, g, fac) == 0
-        assert r5._border_factor(cowell_rhs, 0.0, p, blk, m1, nb, g, fac, bcol, bz, bs, bp, bw, iu, stats) == 0
+        solve_fn = KERNELS[3] if fac.dtype == np.float64 else KERNELS[4]  # the handed-in solve of this type
+        assert r5._border_factor(cowell_rhs, 0.0, p, blk, m1, nb, g, fac, solve_fn, bcol, bz, bs, bp, bw, iu,
+                                 stats) == 0  # fmt: skip
         x = b.astype(fac.dtype)
         z0 = x.copy()
         nw.solve(p, blk, g, fac, m1, z0)
         r5._lin(True, np.zeros((1, 1), dtype=fac.dtype), bp, np.zeros((1, 1)), g, m1, x, p, blk, fac,
-                cowell_rhs, nb, bz, bs, bp, bw, 0.0, iu, stats)  # fmt: skip
+                solve_fn, cowell_rhs, nb, bz, bs, bp, bw, 0.0, iu, stats)  # fmt: skip
         # the forward difference is not exactly linear: the w rows of the dense system at x are
         # off by e(z0) + sum_j x_w,j e(z^j), e(v) = B_qv(v) - (unit-vector assembly) v, on the
         # very vectors the solve applied it to (algebra of docs/integrators.md section 13)
@@ -193,14 +196,14 @@ def test_structured_and_dense_runs_agree(scene, rods, duration):
 
 
 def test_auto_takes_the_bordered_matrix_from_its_rod_count():
-    # driver.AUTO_BORDERED_MIN_RODS (docs/integrators.md section 13: measured slower below it)
-    from tetherlab.integrators import driver
+    # newton_solver.AUTO_BORDERED_MIN_RODS (docs/integrators.md section 13: measured slower below it)
+    from tetherlab.tether import newton_solver
 
-    for rods, kind in ((4, "dense"), (driver.AUTO_BORDERED_MIN_RODS, "structured")):
+    for rods, kind in ((4, "dense"), (newton_solver.AUTO_BORDERED_MIN_RODS, "structured")):
         prep = _prep("deorbit-ed-rigid", rods, "10 s")
         m1 = prep.model.n_qt
-        desc, p_struct = driver._newton_choice("radau5", "auto", prep.model.fresh_params(), prep.y0.size, m1)
-        assert desc.startswith(kind) and (p_struct is not None) == (kind == "structured")
+        solver = newton_solver.choose(prep.model.fresh_params(), prep.y0.size, m1)
+        assert solver.name.startswith(kind) and solver.structured == (kind == "structured")
     # forests are structured too (tests/test_newton_forest.py); a root count that does not match
     # the state's layout (set to 2 on a copy: q has one root block) is refused with the reason
     from tetherlab.model.params import ParamView
@@ -218,7 +221,8 @@ def test_bordered_run_restarts_bit_for_bit():
     m1 = prep.model.n_qt
     states = []
     args = ("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out)
-    kw = dict(h_max=prep.h_max, max_steps=prep.max_steps, second_order=m1, newton="structured")
+    kw = dict(h_max=prep.h_max, max_steps=prep.max_steps, second_order=m1,
+              newton=choose(prep.model.fresh_params(), prep.y0.size, m1, "structured"))
     full = integrate(*args, prep.model.fresh_params(), prep.rtol, prep.atol, checkpoint=states.append, **kw)
     assert full.status == 0 and len(states) >= 1  # a chunk ends after 64 steps (~5 s of 30 s)
     mid = states[len(states) // 2]

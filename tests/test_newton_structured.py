@@ -20,6 +20,7 @@ from tetherlab.formulations.cowell import cowell_rhs, cowell_rhs_py
 from tetherlab.integrators.driver import integrate
 from tetherlab.system import TetherSpec, build_model, chain_state
 from tetherlab.tether import newton as nw
+from tetherlab.tether.newton_solver import choose
 
 from tests.helpers import dense_newton_A as _dense_A, structured_vs_dense_lu
 
@@ -85,8 +86,9 @@ def test_structured_and_dense_runs_agree():
     rtol = 1e-8
     out = {}
     for kind in ("structured", "dense"):
-        res = integrate("radau5", cowell_rhs, 0.0, y0, t_out, model.fresh_params(), rtol, rtol,
-                        second_order=True, newton=kind)  # fmt: skip
+        p = model.fresh_params()
+        res = integrate("radau5", cowell_rhs, 0.0, y0, t_out, p, rtol, rtol, second_order=True,
+                        newton=choose(p, y0.size, True, kind))  # fmt: skip
         assert res.success, res.message
         out[kind] = res
     assert out["structured"].stats["newton_matrix"] == "structured"
@@ -102,13 +104,20 @@ def test_structured_and_dense_runs_agree():
 def test_fallback_names_the_reason():
     # a first-order state (not declared second order) keeps the dense path and says why
     model, y0 = _model("paper", False, False)
-    res = integrate("radau5", cowell_rhs, 0.0, y0, np.array([0.0, 1.0]), model.fresh_params(),
-                    1e-6, 1e-6, second_order=False)  # fmt: skip
+    p = model.fresh_params()
+    res = integrate("radau5", cowell_rhs, 0.0, y0, np.array([0.0, 1.0]), p, 1e-6, 1e-6, second_order=False,
+                    newton=choose(p, y0.size, False))  # fmt: skip
     assert res.success
     assert res.stats["newton_matrix"].startswith("dense (the state is not declared second order")
     with pytest.raises(ValueError, match="newton"):
-        integrate("radau5", cowell_rhs, 0.0, y0, np.array([0.0, 1.0]), model.fresh_params(),
-                  1e-6, 1e-6, second_order=False, newton="structured")  # fmt: skip
+        choose(p, y0.size, False, "structured")
+    # the integrators cannot make that choice themselves: a bare "structured" is refused with a
+    # pointer to the model's, and no solver at all is the dense matrix, named so
+    with pytest.raises(ValueError, match="model's to give"):
+        integrate("radau5", cowell_rhs, 0.0, y0, np.array([0.0, 1.0]), p, 1e-6, 1e-6, second_order=True,
+                  newton="structured")  # fmt: skip
+    res = integrate("radau5", cowell_rhs, 0.0, y0, np.array([0.0, 1.0]), p, 1e-6, 1e-6, second_order=True)
+    assert res.stats["newton_matrix"] == "dense (no structured solver handed in)"
 
 
 # --------------------------------------------------------------------------------------------
@@ -206,8 +215,9 @@ def test_structured_and_dense_runs_of_a_tree_agree(tmp_path):
     prep = _tree(tmp_path)
     out = {}
     for kind in ("structured", "dense"):
-        res = integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, prep.model.fresh_params(), 1e-8,
-                        prep.atol, second_order=True, newton=kind)  # fmt: skip
+        p = prep.model.fresh_params()
+        res = integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, p, 1e-8, prep.atol, second_order=True,
+                        newton=choose(p, prep.y0.size, True, kind))  # fmt: skip
         assert res.success, res.message
         out[kind] = res
     assert out["structured"].stats["newton_matrix"] == "structured"

@@ -26,6 +26,7 @@ from tetherlab import pipeline
 from tetherlab.formulations.cowell import cowell_rhs
 from tetherlab.integrators import driver, radau5
 from tetherlab.scene import load_scene
+from tetherlab.tether.newton_solver import choose
 
 SCENE = Path(__file__).resolve().parents[1] / "studies" / "scenes" / "libration-inplane.toml"
 RODS = 64
@@ -46,17 +47,18 @@ def prepared():
 def _run(prep, gain, monkeypatch, max_steps=10**6):
     def workspace(*args, **kw):
         ws = radau5.radau5_workspace(*args, **kw)
-        ws[7][radau5._F_FLOOR] = gain
+        ws[radau5.WS_FLOATS][radau5._F_FLOOR] = gain
         return ws
 
     monkeypatch.setattr(driver, "radau5_workspace", workspace)
-    return driver.integrate("radau5", cowell_rhs, 0.0, prep.y0, np.array([0.0, T_END_S]),
-                            prep.model.fresh_params(), prep.rtol, prep.atol, second_order=True,
-                            max_steps=max_steps)  # fmt: skip
+    p = prep.model.fresh_params()
+    return driver.integrate("radau5", cowell_rhs, 0.0, prep.y0, np.array([0.0, T_END_S]), p, prep.rtol,
+                            prep.atol, second_order=True, max_steps=max_steps,
+                            newton=choose(p, prep.y0.size, True))  # fmt: skip
 
 
 def test_default_workspace_enables_the_floor_test():
-    assert radau5.radau5_workspace(4, 2)[7][radau5._F_FLOOR] == radau5.FLOOR_GAIN > 0.0
+    assert radau5.radau5_workspace(4, 2)[radau5.WS_FLOATS][radau5._F_FLOOR] == radau5.FLOOR_GAIN > 0.0
 
 
 def test_stalled_newton_at_round_off_is_not_a_failure(prepared, monkeypatch):

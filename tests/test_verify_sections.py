@@ -1,4 +1,4 @@
-"""make verify's section runner (tetherlab/verify.py: section_tasks, run_task, run_tasks).
+"""make verify's section runner (tetherlab/verify/runner.py: section_tasks, run_task, run_tasks).
 
 The sections run in worker processes, longest first; the report must not depend on which worker
 ran a section or when, and a section that fails must be reported with what it computed before
@@ -35,7 +35,7 @@ def test_failing_section_is_reported_with_its_rows(monkeypatch):
         rows.append({"case": "ok"})
         return {"vertical_equilibrium": 0.0}
 
-    monkeypatch.setattr(verify, "CHECKS", [("a", "A", broken), ("b", "B", fine)])
+    monkeypatch.setattr(verify.runner, "CHECKS", [("a", "A", broken), ("b", "B", fine)])  # the runner's table
     res = verify.run_tasks(["check:a", "check:b"], "unused-out-dir", jobs=1, log=lambda *a, **k: None)
     assert res["check:a"]["error"] == "RuntimeError: deliberate failure"
     assert res["check:a"]["rows"] == [{"case": "first row, computed before the failure", "value": 1.0}]
@@ -92,3 +92,23 @@ def test_example1_gate_reads_its_own_row(tmp_path):
     assert verify._stiefel_gates(tmp_path)["stiefel_example1_te_error"] == -math.log10(tol)
     pd.DataFrame(rows[:2]).to_csv(tmp_path / "stiefel_table.csv", index=False)
     assert verify._stiefel_gates(tmp_path)["stiefel_example1_te_error"] == math.inf
+
+
+def test_studies_are_modules_of_the_checkouts_studies_package():
+    import sys
+
+    mod = verify.load_study("catenary")
+    assert mod.__name__ == "studies.catenary" and sys.modules["studies.catenary"] is mod
+    assert verify.load_study("catenary") is mod  # one module object (pickled dataclasses find it)
+
+
+def test_outside_a_checkout_verify_says_what_is_missing(tmp_path, monkeypatch):
+    # an installed tetherlab has no studies/ or references/ beside it: a clear error, not an
+    # ImportError from deep inside a section
+    from tetherlab.verify import checkout
+
+    monkeypatch.setattr(checkout, "ROOT", tmp_path)
+    with pytest.raises(RuntimeError, match="source checkout.*studies"):
+        checkout.load_study("catenary")
+    with pytest.raises(SystemExit):
+        verify.main(["--out", str(tmp_path / "r")])  # argparse's error: usage and the message, status 2

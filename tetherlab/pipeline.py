@@ -449,6 +449,7 @@ def run_segments(prep: Prepared, plan: SegmentPlan, progress=None, store=None):
     import dataclasses
 
     from .integrators.driver import integrate
+    from .tether.newton_solver import choose as choose_newton
 
     t_out = prep.t_out
     t_last = float(t_out[-1])
@@ -478,7 +479,8 @@ def run_segments(prep: Prepared, plan: SegmentPlan, progress=None, store=None):
         io = {} if store is None else store.begin(k, seg_t, z0.size, dict(loop, k=k, t_a=t_a, y_in=y_in, k_out=k_out,
                                                                             budget=budget), ctx)  # fmt: skip
         res = integrate(prep.method, plan.rhs, t_a, z0, seg_t, plan.pe, prep.rtol, plan.atol, h_max=prep.h_max,
-                        max_steps=budget, progress=progress, second_order=plan.second_order, **ev, **io)  # fmt: skip
+                        max_steps=budget, progress=progress, second_order=plan.second_order,
+                        newton=choose_newton(plan.pe, z0.size, plan.second_order), **ev, **io)  # fmt: skip
         if k == 0 and t_b >= t_last and not extra and store is None and plan.anchor is None:
             # one segment: the driver's result as it is, in Cowell rows
             y_rows = plan.leave(ctx, res.t, res.y)
@@ -539,10 +541,12 @@ def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
 def _integrate_cowell(prep: Prepared, p: np.ndarray, progress, **store):
     """``store``: y_out, checkpoint, restart for runs written as they go (tetherlab/runstore.py)."""
     from .integrators.driver import integrate
+    from .tether.newton_solver import choose as choose_newton
 
     return integrate(prep.method, cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol, h_max=prep.h_max,
                      max_steps=prep.max_steps, progress=progress, second_order=_second_order(prep.model),
-                     **_event_args(prep), **store)  # fmt: skip
+                     newton=choose_newton(p, prep.y0.size, _second_order(prep.model)), **_event_args(prep),
+                     **store)  # fmt: skip
 
 
 def _second_order(model):

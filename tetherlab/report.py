@@ -185,7 +185,7 @@ class Document:
             md += [
                 "Each deliberate defect of `tetherlab/mutants.py` is switched on alone and the cheap probes of the "
                 "gates on its code path are run (a probe is the gate's own measurement on fewer cases; see "
-                "`tetherlab/verify.py`, `PROBES`). **CAUGHT** = the gate fails under the defect while it passes "
+                "`tetherlab/verify/controls.py`, `PROBES`). **CAUGHT** = the gate fails under the defect while it passes "
                 "without it; *missed* = the gate passes anyway; · = the defect's code is not on that gate's path. "
                 f"Score: {score} defects caught.", "", self.matrix_md, "",
                 "### The defects", "",

@@ -43,10 +43,14 @@ def run_one(method, n, damping, orbit_fraction, rtol=1e-8, newton="auto", motion
         "duration": f"{orbit_fraction * ORBIT_S} s", "integrator.method": method,
         "integrator.rtol": rtol, "integrator.atol": rtol, "output.count": 11, "orbit.motion": motion,
     })  # fmt: skip
+    from ..tether.newton_solver import choose
+
     prep = prepare(sc)
-    res = integrate(prep.method, cowell_rhs, 0.0, prep.y0, prep.t_out, prep.model.fresh_params(),
+    p = prep.model.fresh_params()
+    res = integrate(prep.method, cowell_rhs, 0.0, prep.y0, prep.t_out, p,
                     prep.rtol, prep.atol, h_max=prep.h_max, max_steps=prep.max_steps,
-                    second_order=True, newton=newton, **_event_args(prep))  # fmt: skip
+                    second_order=True, newton=choose(p, prep.y0.size, True, newton),
+                    **_event_args(prep))  # fmt: skip
     return res
 
 

@@ -61,9 +61,11 @@ def run_until_altitude(scene, stop_altitude_m=STOP_ALTITUDE_M, max_days=200) -> 
 
         res, _ = integrate_prepared(prep, p, None)
     else:
+        from ..tether.newton_solver import choose
+
         res = integrate(prep.method, cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol,
                         h_max=prep.h_max, max_steps=prep.max_steps, second_order=True,
-                        **_event_args(prep))  # fmt: skip
+                        newton=choose(p, prep.y0.size, True), **_event_args(prep))  # fmt: skip
     stats = {k: v for k, v in res.stats.items() if isinstance(v, (int, float))}
     crossing = float(res.t[-1]) if res.stopped_by is not None else float("nan")
     message = f"altitude {stop_altitude_m:g} m reached at t = {crossing:.9g} s" if res.stopped_by is not None else res.message

@@ -50,9 +50,12 @@ def run_one(n, newton, duration_s=DURATION_S):
     from ..integrators.driver import integrate
     from ..pipeline import _event_args, prepare
 
+    from ..tether.newton_solver import choose
+
     prep = prepare(forest_scene(n, duration_s))
-    return integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, prep.model.fresh_params(), prep.rtol,
-                     prep.atol, h_max=prep.h_max, max_steps=prep.max_steps, second_order=True, newton=newton,
+    p = prep.model.fresh_params()
+    return integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol, h_max=prep.h_max,
+                     max_steps=prep.max_steps, second_order=True, newton=choose(p, prep.y0.size, True, newton),
                      **_event_args(prep))  # fmt: skip
 
 

@@ -34,10 +34,14 @@ def run_one(scene, n, newton, duration_s):
     sc = load_scene(ROOT / "studies" / "scenes" / f"{scene}.toml").replace(**{
         "tethers.main.rods": int(n), "duration": f"{duration_s} s", "integrator.method": "radau5",
     })  # fmt: skip
+    from ..tether.newton_solver import choose
+
     prep = prepare(sc)
-    return integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, prep.model.fresh_params(), prep.rtol,
-                     prep.atol, h_max=prep.h_max, max_steps=prep.max_steps, second_order=prep.model.n_qt,
-                     newton=newton, **_event_args(prep))  # fmt: skip
+    p = prep.model.fresh_params()
+    m1 = prep.model.n_qt
+    return integrate("radau5", cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol, h_max=prep.h_max,
+                     max_steps=prep.max_steps, second_order=m1, newton=choose(p, prep.y0.size, m1, newton),
+                     **_event_args(prep))  # fmt: skip
 
 
 def table(rods=(4, 16, 64, 128), scenes=tuple(SCENES), dense_max_rods=128):

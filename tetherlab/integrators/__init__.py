@@ -23,17 +23,21 @@ Kernels (numba, ``cache=True``; one call runs the whole step loop and every rhs 
 RADAU5 applies Hairer's tolerance map (rtol' = 0.1 rtol^(2/3)), so at tight tolerances its
 error in units of the requested tolerance is larger than DOP853's; see :mod:`.radau5`.
 
-Use :func:`integrate` for validation, chunking, progress and scipy cross-checks.
+Use :func:`integrate` for validation, chunking, progress and scipy cross-checks.  RADAU5's Newton
+matrix is its own dense one unless the caller hands it a model's :class:`NewtonSolver`
+(``integrate(..., newton=solver)``; linear_solver.py): this package imports nothing of any model.
 """
 
 from .erk import dop853_run, erk_core, vern9_run
 from .driver import METHODS, IntegrationResult, integrate, warm_up
+from .linear_solver import NewtonSolver
 from .radau5 import radau5_core, radau5_run, radau5_workspace
 from .tableau import TableauError, check_tableau
 
 __all__ = [
     "METHODS",
     "IntegrationResult",
+    "NewtonSolver",
     "TableauError",
     "check_tableau",
     "dop853_run",

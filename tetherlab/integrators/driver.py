@@ -38,8 +38,8 @@ from .common import (
     status_message,
 )
 from .erk import KINDS, erk_core
+from .linear_solver import NewtonSolver, dense
 from .radau5 import radau5_core, radau5_workspace
-from ..kernel.layout import H_NRIGID, H_NRODS
 
 NATIVE_METHODS = ("dop853", "vern9", "radau5")
 SCIPY_METHODS = ("scipy:DOP853", "scipy:Radau", "scipy:LSODA", "scipy:BDF", "scipy:RK45")
@@ -244,12 +244,12 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     is located on the dense output, the integration is taken exactly to it (no step straddles
     it: the place for kinks such as a tether going slack) and restarted there; components whose
     ``terminal[k]`` is true stop the run there, with the stop state as the last output row.
-    ``newton`` (RADAU5): "structured" uses the O(n) Newton matrix of a tether state
-    (tetherlab/tether/newton.py: analytic rod blocks, block-Thomas solve), "dense" the
-    finite-difference Jacobian and dense LU, "auto" the structured one whenever the state is one it
-    understands (Cowell, second order; with rigid bodies under one root the bordered matrix, from
-    32 rods on); ``stats["newton_matrix"]`` says which
-    was used and, for "dense" under "auto", why.
+    ``newton`` (RADAU5): the Newton matrix, as scipy's ``jac``: a
+    :class:`tetherlab.integrators.linear_solver.NewtonSolver` handed in by the model (a tether
+    model's: ``tetherlab.tether.newton_solver.choose(p, n, second_order, "auto")``, the O(n)
+    structured matrix where it applies, which pipeline.py passes for every scene run), or "dense"
+    / "auto" (no solver handed in): the finite-difference Jacobian and dense LU.
+    ``stats["newton_matrix"]`` says which was used and, for a dense one, why.
     Never raises for a failure of the integration itself: that is
     reported in the result's ``status``/``message``, with every output computed before it.
 
@@ -294,10 +294,10 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         raise ValueError(f"second_order: expected a bool or an integer M1 with 0 <= 2 M1 <= n = {n}; got {second_order!r}")
     # the structured Newton matrix: y = [q, q'], or y = [q, q', w] with rigid bodies' attitude and
     # wheels as the border (docs/integrators.md section 13)
-    newton_kind, p_struct = _newton_choice(method, newton, p, n, m1)
+    solver = _newton_choice(method, newton)
 
     def new_ws():
-        return radau5_workspace(n, m1, p_struct) if method == "radau5" else ()
+        return radau5_workspace(n, m1, solver) if method == "radau5" else ()
 
     ws = new_ws()
     ev = _NO_EV.copy()
@@ -391,7 +391,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         "compile_s": compile_s,
     }
     if method == "radau5":
-        stats_d["newton_matrix"] = newton_kind
+        stats_d["newton_matrix"] = solver.name
     msg = status_message(status, t, h, stats_d["rhs_status"], stats_d["n_newton_fail"], max_steps)
     # Only rows that were computed are returned; a failed run's unused rows are dropped (copied
     # out so the unused tail of a large buffer is freed).
@@ -414,49 +414,25 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     )  # fmt: skip
 
 
-#: "auto" takes the structured Newton matrix from this many rods on (see _newton_choice)
-AUTO_STRUCTURED_MIN_RODS = 4
-#: ... and with rigid bodies (the bordered matrix) from this many rods on
-AUTO_BORDERED_MIN_RODS = 32
-
-
-def _newton_choice(method, newton, p, n, second_order):
-    """(description for the stats, p for a structured workspace or None)."""
-    if newton not in ("auto", "dense", "structured"):
-        raise ValueError(f"newton: expected 'auto', 'dense' or 'structured'; got {newton!r}")
+def _newton_choice(method, newton):
+    """The NewtonSolver of a RADAU5 run (None for the other methods)."""
+    if not isinstance(newton, NewtonSolver) and newton not in ("auto", "dense"):
+        hint = (" ('structured' is the model's to give: e.g. tetherlab.tether.newton_solver.choose(p, n, "
+                "second_order, 'structured'))" if newton == "structured" else "")  # fmt: skip
+        raise ValueError(f"newton: expected a NewtonSolver, 'auto' or 'dense'; got {newton!r}{hint}")
     if method != "radau5":
-        return "", None
-    if newton == "dense":
-        return "dense (requested)", None
-    from ..tether.newton import structure_supported
-
-    why = structure_supported(p, n, second_order)
-    if not why and newton == "auto" and int(p[H_NRIGID]) > 0 and int(p[H_NRODS]) < AUTO_BORDERED_MIN_RODS:
-        # The bordered matrix (rigid bodies, docs/integrators.md section 13) pays for its ~4 rhs
-        # calls per border unknown and step from a few tens of rods on: measured slower at 16 rods
-        # on rigid-example (1.4x), within the timing noise at 24 (1.2x faster), 2x or more faster
-        # at 32, 64 and 128 on it and on deorbit-ed-rigid.
-        why = (f"rigid bodies with {int(p[H_NRODS])} rods, fewer than {AUTO_BORDERED_MIN_RODS}: the dense "
-               "path is as cheap (newton='structured' forces the bordered matrix)")  # fmt: skip
-    if not why and newton == "auto" and int(p[H_NRODS]) < AUTO_STRUCTURED_MIN_RODS:
-        # Below a few rods the dense path costs no more (measured at n = 2: 3.1 s dense against
-        # 2.9 s structured on bench-libration) and keeps the full finite-difference Jacobian, whose
-        # error filtering stays tolerance-proportional on an undamped stiff tether: hard-stiff
-        # (n = 2, EA x 1000) converges at rate 1.58 per decade dense, 0.49 structured
-        # (docs/integrators.md section 7).
-        why = f"{int(p[H_NRODS])} rods, fewer than {AUTO_STRUCTURED_MIN_RODS}: the dense path is as cheap"
-    if not why:
-        return "structured", p
-    if newton == "structured":
-        raise ValueError(f"newton: 'structured' is not available for this state: {why}")
-    return f"dense ({why})", None
+        return None
+    if isinstance(newton, NewtonSolver):
+        return newton
+    return dense("requested" if newton == "dense" else "no structured solver handed in")
 
 
 def _ws_arrays(ws):
-    """The workspace's arrays in order, the border's tuple (radau5_workspace) expanded."""
+    """The workspace's arrays in order, its tuples (radau5_workspace) expanded; the Newton solver's
+    functions at its end are not state."""
     out = []
     for a in ws:
-        out.extend(a if isinstance(a, tuple) else (a,))
+        out.extend(x for x in (a if isinstance(a, tuple) else (a,)) if isinstance(x, np.ndarray))
     return out
 
 

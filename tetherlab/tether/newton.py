@@ -95,7 +95,7 @@ def structure_supported(p, n_state, second_order):
     With rigid bodies (Cowell's inertial formulation) the structured matrix is the
     bordered one of docs/integrators.md section 13: the tether blocks of :func:`solve` with every
     body as a point mass of its translational mass at its joint, bordered by finite-difference
-    columns of the w unknowns (tetherlab/integrators/radau5.py, ``_border_*``).
+    columns of the w unknowns (tetherlab/integrators/radau5/border.py).
     """
     if second_order is True:
         second_order = n_state // 2

@@ -1,0 +1,216 @@
+"""The negative controls of verify: every deliberate defect (tetherlab.mutants) against the gates'
+cheap probes, the mutation matrix and its two gates."""
+
+from __future__ import annotations
+
+import math
+import time
+
+from ..report import _fmt
+from .checks import (
+    check_de421,
+    check_dop853,
+    check_heyoka_orbits,
+    check_invariants,
+    check_lateral_mode,
+    check_libration,
+    check_stiefel_probe,
+)
+from .studies import check_catenary_probe
+
+#: (probe name, function(rows) -> {gate: value}, code paths it exercises)
+PROBES = [
+    ("libration", lambda rows: check_libration(rows, ns=(1, 4)), {"tether", "integrator"}),
+    ("invariants", lambda rows: check_invariants(rows, quick=True), {"tether", "diagnostics", "integrator"}),
+    ("lateral", lambda rows: check_lateral_mode(rows, kinds=("paper", "energy")), {"tether", "integrator"}),
+    ("catenary", lambda rows: check_catenary_probe(rows), {"tether", "statics"}),
+    ("heyoka_orbits", lambda rows: check_heyoka_orbits(rows), {"gravity", "integrator"}),
+    ("stiefel", lambda rows: check_stiefel_probe(rows), {"gravity", "moon", "integrator", "dromo"}),
+    ("de421", lambda rows: check_de421(rows), {"de421"}),
+    ("dop853", lambda rows: check_dop853(rows), {"integrator"}),
+]
+#: the probes the CI test runs (tests/test_gates.py): the cheapest defect/gate pairs
+FAST_PAIRS = (
+    ("statics_holding_force_1pc", "catenary"),
+    ("energy_without_elastic_term", "invariants"),
+    ("de421_low_degree", "de421"),
+    ("j2_sign", "heyoka_orbits"),
+)
+
+#: gates no defect of tetherlab.mutants can reach, and why (the report marks them toothless)
+TOOTHLESS = {
+    "vertical_equilibrium": "the start is the model's own relative equilibrium, solved with the same kernels, so a "
+    "defect of the model moves the equilibrium with it; the gate checks the equilibrium solver and the "
+    "integration's stability, not the physics",
+    "reproducible_runs": "a deterministic defect is reproduced exactly; the gate guards non-determinism (chunking, "
+    "threads, uninitialised memory), which no defect here introduces",
+    "stiefel_reference_data_check": "a data check: it reads the builders' stored distance between two oracle "
+    "references, so no simulator defect can move it",
+    "catenary_order_deviation": "the statics' convergence order: the defects on the statics path are a constant "
+    "offset (holding force: seen by catenary_tension_n64) or act on motion only (velocities are zero at rest)",
+    "libration_outofplane_frequency": "held to the theory's leading order only (2e-3, gates.toml): the registry's "
+    "defects of the distributed forces move 2 w by 1.3e-3 (F_TP dropped) and 1.7e-3 (one node) on this scene's "
+    "10 kg tether between 1100 kg of end masses, inside the theory's own error; libration_rod_count_spread, "
+    "which is exact to (L/r0)^2, catches both",
+    "catenary_shape_n64": "the shape of a chain at rest in uniform gravity: the half-rod loads are uniform "
+    "(exact for any node count) and at rest the defects of eqs. 19, 20 and F_TP change no equilibrium "
+    "(measured: shape unchanged to 1e-9 under each); the statics defect in the registry is in the holding "
+    "force, which catenary_tension_n64 catches",
+    "deorbit_n1_vs_paper": "not probed: a de-orbit run takes minutes (the whole study in make verify); no defect of "
+    "the electrodynamic or drag path is in the registry yet",
+    "deorbit_n1_vs_closed_form": "not probed: as deorbit_n1_vs_paper",
+    "deorbit_n4_vs_n1": "not probed: as deorbit_n1_vs_paper",
+    "hard_cases_failed": "not probed: each hard case runs tens of seconds; the study runs its own eq. 20 control "
+    "(hard_cases_negative_control)",
+    "hard_cases_invariant_over_bound": "not probed: as hard_cases_failed (the control is the printed-model run)",
+    "hard_cases_convergence_score": "not probed: as hard_cases_failed",
+    "hard_cases_floor_over_loose_change": "not probed: a property of the tolerance ladders chosen, not of the code",
+    "hard_cases_collapse_stop_spread": "not probed: as hard_cases_failed",
+    "hub_spoke_centre_tip_over_bound": "not probed: the rigid-body study runs minutes; the registry has no defect "
+    "on a point-mass hub's steady spin that the cheap probes miss, and the study's own control (a 1 % stiffer "
+    "tether, hub_spoke_centre_negative_control) shows the order gate sees a stiffness error",
+    "hub_spoke_centre_tension_over_bound": "not probed: as hub_spoke_centre_tip_over_bound",
+    "hub_spoke_centre_order_deficit": "not probed by the registry: its own control is "
+    "hub_spoke_centre_negative_control (a 1 % stiffer tether fails it)",
+    "hub_spoke_centre_negative_control": "a control itself (must pass: the order gate fails a 1 % stiffer tether)",
+    "hub_spoke_radius_tension_over_bound": "not probed: the rigid attachment defects are run and credited through "
+    "hub_spoke_radius_tip_over_bound (the study's part B)",
+    "hub_spoke_radius_order_deficit": "not probed: as hub_spoke_radius_tension_over_bound",
+    "torque_free_over_bound": "not probed by the registry (no defect of the attitude kinematics in it yet): the "
+    "study's own control perturbs the inertia by 1e-4 (torque_free_negative_control)",
+    "torque_free_negative_control": "a control itself (a 1e-4 inertia error must fail torque_free_over_bound)",
+    "torque_free_convergence": "not probed: the integrator's convergence on the torque-free body (a property of "
+    "the tolerance ladder, as hard_cases_floor_over_loose_change)",
+    "gg_libration_frequency": "not probed by the registry (no gravity-gradient-torque defect in it yet): the "
+    "study's own control perturbs the inertia (gg_libration_negative_control)",
+    "gg_libration_negative_control": "a control itself (a perturbed inertia must fail gg_libration_frequency)",
+    "wheel_exchange_over_bound": "not probed: no wheel defect in the registry yet; an exact first integral "
+    "(H, and energy minus motor work) within a derived round-off bound",
+    "wheels_tumbling_over_bound": "not probed: as wheel_exchange_over_bound",
+    "untethered_bodies_over_bound": "not probed: compares a forest against single-body runs of the same kernel; a "
+    "model defect moves both alike (it guards the forest's bookkeeping)",
+    "conservation_tree_over_bound": "not probed by the harness (the study runs minutes); tests/test_rigid.py runs "
+    "the two attachment defects against the same first integrals and both fail them by > 1e6 x the bound",
+    "mutation_uncaught_defects": "the mutation score itself",
+    "mutation_toothless_unexplained": "the count of gates without teeth or reason itself",
+}
+
+
+def run_negative_controls(rows_out, gates: dict, names=None, probes=None):
+    """Each active defect (tetherlab.mutants) against every probe on its code path.
+
+    Returns (cells, baseline, log): cells[(defect, gate)] = (value, "caught" / "missed");
+    baseline[gate] = the probe's value with no defect (a probe that fails with no defect cannot
+    claim a catch).  ``names``/``probes`` restrict the run (tests)."""
+    from .. import mutants
+
+    names = mutants.names() if names is None else names
+    wanted = [p for p in PROBES if probes is None or p[0] in probes]
+    baseline, cells = {}, {}
+    t_all = time.perf_counter()
+    for pname, fn, _paths in wanted:
+        t0 = time.perf_counter()
+        vals = fn([])
+        baseline.update(vals)
+        rows_out.append({"defect": "(none)", "probe": pname, "wall (s)": time.perf_counter() - t0,
+                         **{g: v for g, v in vals.items()}})  # fmt: skip
+    for name in names:
+        m = mutants.MUTANTS[name]
+        for pname, fn, paths in wanted:
+            if m.path not in paths:
+                continue
+            if pname in m.skip:
+                for g in _probe_gates(pname, baseline):
+                    cells[name, g] = (None, "skipped: " + m.skip[pname])
+                continue
+            t0 = time.perf_counter()
+            try:
+                with mutants.active(name):
+                    vals = fn([])
+            except Exception as exc:  # a measurement that refuses to run under the defect fails it
+                vals = {g: math.inf for g in _probe_gates(pname, baseline)}
+                rows_out.append({"defect": name, "probe": pname, "error": f"{type(exc).__name__}: {exc}"[:200]})
+            for g, v in vals.items():
+                thr = gates.get(g, {}).get("threshold", math.inf)
+                base_ok = not mutants.caught(baseline.get(g), thr)
+                cells[name, g] = (v, "caught" if (base_ok and mutants.caught(v, thr)) else "missed")
+            rows_out.append({"defect": name, "probe": pname, "wall (s)": time.perf_counter() - t0})
+    rows_out.append({"defect": "(all)", "probe": "total", "wall (s)": time.perf_counter() - t_all})
+    return cells, baseline
+
+
+def _probe_gates(pname, baseline):
+    return _PROBE_GATES.get(pname, [])
+
+
+_PROBE_GATES = {
+    "libration": ["libration_inplane_frequency", "libration_outofplane_frequency", "libration_rod_count_spread"],
+    "invariants": ["angular_momentum_internal", "energy_model_energy", "energy_model_power_balance"],
+    "lateral": ["lateral_mode_two_rods"],
+    "catenary": ["catenary_shape_n64", "catenary_tension_n64", "catenary_order_deviation"],
+    "heyoka_orbits": ["heyoka_orbits_position"],
+    "stiefel": ["stiefel_cowell_best_error", "stiefel_dromo_best_error", "stiefel_example1_te_error"],
+    "de421": ["de421_fit_error"],
+    "dop853": ["dop853_work_exponent"],
+}
+
+
+def mutation_summary(cells, gates: dict, study_values: dict):
+    """(defect -> gates that caught it, gate -> defects it caught, the two mutation gate values)."""
+    from .. import mutants
+
+    by_defect = {n: [] for n in mutants.names()}
+    by_gate = {g: [] for g in gates}
+    for (d, g), (_v, verdict) in cells.items():
+        if verdict == "caught":
+            by_defect.setdefault(d, []).append(g)
+            by_gate.setdefault(g, []).append(d)
+    # the hard-cases study runs eq. 20 as printed itself (its control gate must pass = it was seen)
+    ctrl = study_values.get("hard_cases_negative_control")
+    if ctrl is not None and ctrl <= gates["hard_cases_negative_control"]["threshold"]:
+        by_defect.setdefault("eq20_printed_sign", []).append("hard_cases_invariant_over_bound")
+        by_gate.setdefault("hard_cases_invariant_over_bound", []).append("eq20_printed_sign")
+        by_gate.setdefault("hard_cases_negative_control", []).append("eq20_printed_sign")
+    # the hard-cases study runs the n = 512 tether with the damping's sign flipped (part 5): its
+    # control gate passes only if the stability measure fails under that defect
+    ctrl = study_values.get("hard_cases_n512_negative_control")
+    if ctrl is not None and ctrl <= gates["hard_cases_n512_negative_control"]["threshold"]:
+        by_defect.setdefault("damping_sign", []).append("hard_cases_n512_stability")
+        by_gate.setdefault("hard_cases_n512_stability", []).append("damping_sign")
+        by_gate.setdefault("hard_cases_n512_negative_control", []).append("damping_sign")
+    # the rigid-body study runs the kernel's two attachment defects itself (part B): its control
+    # gate passes only if the tip-radius measure fails under both (studies/rigid_bodies.py)
+    ctrl = study_values.get("hub_spoke_radius_defects_negative_control")
+    if ctrl is not None and ctrl <= gates["hub_spoke_radius_defects_negative_control"]["threshold"]:
+        for d in ("rigid_attachment_not_rotated", "rigid_centripetal_dropped"):
+            by_defect.setdefault(d, []).append("hub_spoke_radius_tip_over_bound")
+            by_gate.setdefault("hub_spoke_radius_tip_over_bound", []).append(d)
+            by_gate.setdefault("hub_spoke_radius_defects_negative_control", []).append(d)
+    uncaught = [d for d, gs in by_defect.items() if not gs]
+    unexplained = [g for g, ds in by_gate.items() if not ds and g not in TOOTHLESS]
+    return by_defect, by_gate, {"mutation_uncaught_defects": float(len(uncaught)),
+                                "mutation_toothless_unexplained": float(len(unexplained))}
+
+
+def matrix_md(cells, gates: dict, by_defect, by_gate) -> str:
+    from .. import mutants
+
+    gate_cols = [g for g in gates if any(g == gg for (_d, gg) in cells) or by_gate.get(g)]
+    head = "| defect | " + " | ".join(f"[{g}](#gate-{g})" for g in gate_cols) + " | caught by |"
+    lines = [head, "|---|" + "---|" * (len(gate_cols) + 1)]
+    for name in mutants.names():
+        row = []
+        for g in gate_cols:
+            v = cells.get((name, g))
+            if v is None:
+                row.append("CAUGHT (study)" if name in by_gate.get(g, []) else "·")
+            elif v[1] == "caught":
+                row.append(f"**CAUGHT** {_fmt(v[0])}")
+            elif v[1].startswith("skipped"):
+                row.append("skipped")
+            else:
+                row.append(f"missed {_fmt(v[0])}")
+        lines.append(f"| {name} | " + " | ".join(row) + f" | {len(by_defect.get(name, []))} |")
+    return "\n".join(lines)
+
+

@@ -1,0 +1,202 @@
+"""The studies verify runs (scripts of the checkout's studies/ package that write OUTDIR/<name>.md,
+CSV and PNG) and the readers of their gates."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..report import table as _table_md
+from .checks import EXAMPLE1_TE_RUN
+from .checkout import load_study
+
+
+def catenary_values(df, rows_out=None) -> dict:
+    """The catenary gates from the study's table (paper model): the n = 64 errors in units of
+    their Richardson estimate |e(32) - e(64)| / (2^2 - 1) (order 2, docs/catenary.md), and the
+    observed order."""
+    mod = load_study("catenary")
+    paper = df[df.model == "paper"].sort_values("n")
+    last, prev = paper.iloc[-1], paper.iloc[-2]
+    def worst(cols):
+        w = 0.0
+        for c in cols:
+            est = abs(float(prev[c]) - float(last[c])) / 3.0
+            ratio = float(last[c]) / est if est > 0 else math.inf
+            if rows_out is not None:
+                rows_out.append({"case": f"catenary {c}, n = {int(last.n)} (paper model)", "error": float(last[c]),
+                                 "Richardson estimate |e(n/2) - e(n)|/3": est, "error / estimate": ratio})  # fmt: skip
+            w = max(w, ratio)
+        return w
+
+    out = {
+        "catenary_shape_n64": worst(("shape_joints_m",)),
+        "catenary_tension_n64": worst(("tension_A_N", "tension_B_N", "holding_force_N", "nail_force_N")),
+    }
+    order = mod.observed_order(paper["n"], paper["shape_joints_m"])
+    out["catenary_order_deviation"] = abs(order - 2.0)
+    return out
+
+
+def _catenary_gates(outdir: Path) -> dict:
+    import pandas as pd
+
+    return catenary_values(pd.read_csv(outdir / "catenary.csv"))
+
+
+def check_catenary_probe(rows_out):
+    """The catenary study's paper-model rows n = 4 ... 64 (its gates), without figures."""
+    import pandas as pd
+
+    mod = load_study("catenary")
+    df = pd.DataFrame(mod.run(mod.load_reference(), ns=(4, 8, 16, 32, 64), models=("paper",)))
+    return catenary_values(df, rows_out)
+
+
+def _stiefel_gates(outdir: Path) -> dict:
+    import pandas as pd
+
+    df = pd.read_csv(outdir / "stiefel_table.csv")
+    best = {who: float(g["final_position_error_m"].min()) for who, g in df.groupby("who")}
+    form, method, tol = EXAMPLE1_TE_RUN
+    ex1 = df[(df["who"] == f"ex1 tetherlab {form} {method}") & (np.isclose(df["tol"], tol, rtol=1e-9, atol=0.0))]
+    return {
+        "stiefel_cowell_best_error": min(v for k, v in best.items() if k.startswith("tetherlab cowell")),
+        "stiefel_dromo_best_error": min(v for k, v in best.items() if k.startswith("tetherlab dromo")),
+        # a missing row (the study did not run it) fails the gate
+        "stiefel_example1_te_error": float(ex1["final_position_error_m"].iloc[0]) if len(ex1) else math.inf,
+    }
+
+
+def _deorbit_gates(outdir: Path) -> dict:
+    runs = json.loads((outdir / "deorbit_summary.json").read_text())["runs"]
+    n1 = runs[0]
+    out = {"deorbit_n1_vs_paper": abs(n1["vs_paper_rel"]), "deorbit_n1_vs_closed_form": abs(n1["vs_closed_form_rel"])}
+    n4 = [r for r in runs if r.get("label", "").startswith("n=4")]
+    if n4:
+        out["deorbit_n4_vs_n1"] = abs(n4[0]["deorbit_days"] / n1["deorbit_days"] - 1.0)
+    return out
+
+
+def _hard_cases_gates(outdir: Path) -> dict:
+    s = json.loads((outdir / "hard_cases_summary.json").read_text())
+    control = s.get("negative_control_over_bound")
+    return {
+        "hard_cases_failed": float(s["failed"]),
+        "hard_cases_invariant_over_bound": s["invariant_over_bound"],
+        "hard_cases_convergence_score": s["convergence_score"],
+        "hard_cases_floor_over_loose_change": s["floor_over_loose_change"],
+        "hard_cases_collapse_stop_spread": s["stop_time_spread_s"],
+        # the control must exceed its bound; the gate reads bound / measured (<= 1 passes)
+        "hard_cases_negative_control": (1.0 / control) if control else math.inf,
+        # issue 11: n = 512 over an orbit (part 5), and its anti-damped control (inverted likewise)
+        "hard_cases_n512_stability": s["n512_stability"] if s.get("n512_stability") is not None else math.inf,
+        "hard_cases_n512_negative_control": _inverse(s.get("n512_control_stability")),
+    }
+
+
+def _inverse(v):
+    """1 / a control's measurement (its gate passes when the control fails its bound); a control
+    that did not run gives inf (fails), one that stopped (inf) gives 0."""
+    return math.inf if v is None or v == 0 else 1.0 / v
+
+
+def _rigid_bodies_gates(outdir: Path) -> dict:
+    """Gates of studies/rigid_bodies.py (issue 10; bounds in docs/rigid-oracles.md section 7).
+    A part the build cannot run (no rigid bodies) leaves its gates None: "not measured"."""
+    g = json.loads((outdir / "rigid_bodies_summary.json").read_text())["gates"]
+    return {
+        "hub_spoke_centre_tip_over_bound": g.get("hub_spoke_centre_tip_over_bound"),
+        "hub_spoke_centre_tension_over_bound": g.get("hub_spoke_centre_tension_over_bound"),
+        "hub_spoke_centre_order_deficit": g.get("hub_spoke_centre_order_deficit"),
+        "hub_spoke_centre_negative_control": g.get("hub_spoke_centre_negative_control"),
+        "hub_spoke_radius_tip_over_bound": g.get("hub_spoke_radius_tip_over_bound"),
+        "hub_spoke_radius_tension_over_bound": g.get("hub_spoke_radius_tension_over_bound"),
+        "hub_spoke_radius_order_deficit": g.get("hub_spoke_radius_order_deficit"),
+        "hub_spoke_radius_defects_negative_control": g.get("hub_spoke_radius_defects_negative_control"),
+        "torque_free_over_bound": g.get("torque_free_over_bound"),
+        "torque_free_negative_control": g.get("torque_free_negative_control"),
+        "torque_free_convergence": g.get("torque_free_convergence"),
+        "gg_libration_frequency": g.get("gg_libration_frequency"),
+        "gg_libration_negative_control": g.get("gg_libration_negative_control"),
+        "wheel_exchange_over_bound": g.get("wheel_exchange_over_bound"),
+        "wheels_tumbling_over_bound": g.get("wheels_tumbling_over_bound"),
+        "untethered_bodies_over_bound": g.get("untethered_bodies_over_bound"),
+        "conservation_tree_over_bound": g.get("conservation_tree_over_bound"),
+    }
+
+
+#: (title, study script in studies/, its arguments after OUTDIR, markdown it writes, gate reader)
+STUDIES = [
+    ("Catenary against Irvine's elastic catenary (paper section 4.2)", "catenary", [], "catenary.md", _catenary_gates),
+    ("Stiefel-Scheifele: Cowell and DROMO against the oracle (paper section 4.1, Figure 3)", "stiefel_table", [],
+     "stiefel_table.md", _stiefel_gates),
+    ("Electrodynamic de-orbit (paper section 5, Figure 7)", "deorbit", [], None, _deorbit_gates),
+    ("Lumped-mass (bead) model against TMED", "bead_vs_tmed", [], "bead_vs_tmed.md", None),
+    ("Rod-count convergence", "convergence", ["--quiet"], "convergence.md", None),
+    ("What accuracy costs in time (work-precision)", "workprecision", ["--quiet"], "work_precision.md", None),
+    ("Hard cases", "hard_cases", ["--quiet"], "hard_cases.md", _hard_cases_gates),
+    ("Fidelity ladder: the de-orbit at each environment level (issue 13)", "fidelity", ["--quiet"], "fidelity.md", None),
+    ("Rigid bodies, wheels, attitude control and tether trees (issue 10)", "rigid_scenes", [], "rigid_scenes.md", None),
+    ("Rigid bodies, wheels and hub-and-spoke against the oracles (issue 10)", "rigid_bodies", ["--quiet"],
+     "rigid_bodies.md", _rigid_bodies_gates),
+]
+
+
+#: the studies that run their scenes through tetherlab.sweep (they take ``--workers N``)
+SWEEPING_STUDIES = ("convergence", "workprecision", "hard_cases")
+
+
+def _summary_md(name: str, sdir: Path) -> str:
+    """A section for a study that writes JSON/CSV and figures but no Markdown of its own."""
+    lines = []
+    for csv in sorted(sdir.glob("*.csv")):
+        import pandas as pd
+
+        df = pd.read_csv(csv)
+        keep = [c for c in df.columns if df[c].dtype != object or c in ("label", "case", "method")][:12]
+        lines += [f"`{csv.name}`:", "", _table_md(df[keep].to_dict("records")), ""]
+    lines += [f"![{png.stem}]({png.name})" for png in sorted(sdir.glob("*.png"))]
+    return "\n".join(lines)
+
+
+def run_studies(out: Path, only=None, study_workers: int | None = None):
+    """Run every study into out/<name>/; a study that fails is reported (its gates then fail),
+    the others still run.  ``study_workers``: the worker processes of the studies that sweep
+    (``--workers``; None: their default, all cores)."""
+    sections, values, failures = [], {}, []
+    for title, name, extra, md_name, gates_fn in STUDIES:
+        if only is not None and name not in only:
+            continue
+        sdir = out / name
+        sdir.mkdir(parents=True, exist_ok=True)
+        t0 = time.perf_counter()
+        try:
+            pool = ["--workers", str(study_workers)] if study_workers and name in SWEEPING_STUDIES else []
+            load_study(name).main([str(sdir), *extra, *pool])
+            values.update(gates_fn(sdir) if gates_fn else {})
+            md = (sdir / md_name).read_text() if md_name else _summary_md(name, sdir)
+            # images and links in the study's Markdown are relative to its own directory
+            md = re.sub(r"\]\((?!https?:|#)([^)]+)\)", lambda m: f"]({name}/{m.group(1)})", md)
+            md = _nest_headings(md)
+            sections.append((name, title, md, time.perf_counter() - t0))
+        except Exception as exc:  # report and go on: one broken study must not hide the rest
+            failures.append(name)
+            sections.append((name, title, f"**Study failed:** `{type(exc).__name__}: {exc}`", time.perf_counter() - t0))
+    return sections, values, failures
+
+
+def _nest_headings(md: str) -> str:
+    """A study's Markdown under the report's own section heading: its leading title (which the
+    report's heading replaces) is dropped and its other headings go one level down."""
+    lines = md.lstrip("\n").split("\n")
+    if lines and re.match(r"#{1,2} ", lines[0]):
+        lines = lines[1:]
+    return re.sub(r"^(#{1,5}) ", r"#\1 ", "\n".join(lines), flags=re.M)
+
+
