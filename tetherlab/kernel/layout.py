@@ -134,6 +134,9 @@ BT_PT = 16         # its attachment point at the end of its parent tether, body 
 BT_JS = 19         # J_s = J_B - sum I_k a_k a_k^T (9, body axes): the body with its wheels free
 BT_JB = 28         # J_B, wheels locked (9, body axes): the mass distribution (gravity gradient)
 BT_SIZE = 40
+# part kind of each body (bodies/parts.py dispatches every part function on it); the code lives in
+# the BT_RIGID slot, written once by build_model: PART_POINT = 0 (point mass), PART_RIGID = 1
+BT_PART = BT_RIGID; PART_POINT = 0; PART_RIGID = 1  # noqa: E702
 
 CTRL_NONE = 0
 CTRL_ORBIT = 1     # hold the body's own orbit frame
