@@ -17,25 +17,25 @@ import math
 from .._jit import njit
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def cross(ax, ay, az, bx, by, bz):
     """a x b."""
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def dot(ax, ay, az, bx, by, bz):
     """a . b, summed x + y + z."""
     return ax * bx + ay * by + az * bz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def norm(x, y, z):
     """|v| = sqrt(x^2 + y^2 + z^2)."""
     return math.sqrt(x * x + y * y + z * z)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def mat_vec(a, o, x, y, z):
     """A v with A = a[o:o+9] row-major."""
     return (
@@ -45,7 +45,7 @@ def mat_vec(a, o, x, y, z):
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def mat_t_vec(a, o, x, y, z):
     """A^T v with A = a[o:o+9] row-major."""
     return (
@@ -65,7 +65,7 @@ def mat_vec_n(a, o, v, out, n):
         a[out + i] = s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def inv3(a, ao, out, oo):
     """Inverse of the 3x3 block a[ao:ao+9] into out[oo:oo+9] (may be the same place), by cofactors;
     returns the determinant (0.0, and nothing written, when it is exactly zero)."""
@@ -141,7 +141,7 @@ def inv_n(p, a, out, n):
     return det
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def add_iuu(a, o, alpha, beta, ux, uy, uz):
     """a[o:o+9] += alpha I + beta u u^T."""
     a[o] += alpha + beta * ux * ux
@@ -155,14 +155,14 @@ def add_iuu(a, o, alpha, beta, ux, uy, uz):
     a[o + 8] += alpha + beta * uz * uz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def iuu_vec(alpha, beta, ux, uy, uz, x, y, z):
     """(alpha I + beta u u^T) v = alpha v + beta (u . v) u."""
     uv = ux * x + uy * y + uz * z
     return alpha * x + beta * uv * ux, alpha * y + beta * uv * uy, alpha * z + beta * uv * uz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sub_iuu_sandwich(a, o, s, alpha, beta, u0, u1, u2):
     """a[o:o+9] -= K S K with K = alpha I + beta u u^T and S = a[s:s+9] symmetric:
     K S K = alpha^2 S + alpha beta (S u u^T + u u^T S) + beta^2 (u . S u) u u^T."""

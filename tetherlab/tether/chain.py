@@ -95,7 +95,7 @@ def chain_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz):
     return 0, ax, ay, az, avx, avy, avz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rod_coefficients(p, g):
     """What rod g brings to the rows of its two joints: P = pa I + be u u^T, M = al I + be u u^T,
     alpha_A and alpha_B (docs/model.md 4.3), computed once per rod per evaluation."""
@@ -194,7 +194,7 @@ def chain_reduce(t, p, k):
     return 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rod_acceleration(p, acc, g, ja):
     """d'' of rod g from eq. 26, m d'' = Q - C (J_{i-1} + J_i), J_{i-1} at p[ja], J_i after it."""
     sb = int(p[H_OFF_SCR]) + g * SR_SIZE

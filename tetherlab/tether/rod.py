@@ -59,7 +59,7 @@ def fail(p, code, rod, t, val):
     return code
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def strain(dn, lu):
     """Strain of a rod of half-separation |d| = dn and unstretched length lu: eq. 2 with the
     stretched length of eq. 3, eps = L_a/L_u - 1, L_a = 2 sqrt3 |d|."""
@@ -67,7 +67,7 @@ def strain(dn, lu):
     return la / lu - 1.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def next_joint(q, qd, g, ax, ay, az, avx, avy, avz):
     """The one joint step of every walk along a tether (eq. 23): from end A of rod g to its end B,
     r_B = r_A + 2 sqrt3 d_g (position and velocity)."""
@@ -78,7 +78,7 @@ def next_joint(q, qd, g, ax, ay, az, avx, avy, avz):
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rod_force(t, q, qd, p, g, tension_only, energy, printed, ax, ay, az, avx, avy, avz):
     """Geometry, elastic force and distributed forces of rod g whose end A is at (ax.., avx..):
     writes R_1, R_2, Q, C, u, F_E, strain and strain rate to its scratch.  Returns a failure code."""
