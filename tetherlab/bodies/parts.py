@@ -55,12 +55,12 @@ from .rigid_body import (
 )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_kind(p, b):
     return int(p[int(p[H_OFF_BODY]) + b * BT_SIZE + BT_PART])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _set_state(p, b, rx, ry, rz, vx, vy, vz):
     bs = int(p[H_OFF_BSCR]) + b * BS_SIZE
     p[bs + BS_R] = rx
@@ -71,7 +71,7 @@ def _set_state(p, b, rx, ry, rz, vx, vy, vz):
     p[bs + BS_V + 2] = vz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_root_state(att, p, b, rx, ry, rz, vx, vy, vz):
     """A root's centre of mass (from q) into its scratch, and its attitude."""
     _set_state(p, b, rx, ry, rz, vx, vy, vz)
@@ -79,7 +79,7 @@ def body_root_state(att, p, b, rx, ry, rz, vx, vy, vz):
         rigid_attitude(att, p, b)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_end_state(att, p, c, bx, by, bz, bvx, bvy, bvz):
     """Body c at the end B_n (position, velocity) of its parent tether: its centre of mass
     (r_G = r_B - R rho_b on a rigid body) and attitude into its scratch."""
@@ -92,7 +92,7 @@ def body_end_state(att, p, c, bx, by, bz, bvx, bvy, bvz):
         _set_state(p, c, bx, by, bz, bvx, bvy, bvz)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_attach(p, b, tb, ts, ax, ay, az, avx, avy, avz):
     """The attachment point A_1 of the tether (table tb, scratch ts) on body b, from b's centre
     of mass (ax.., avx..): a rigid body adds rho = R rho_b (and keeps rho, kappa in ts)."""
@@ -108,7 +108,7 @@ def body_attach(p, b, tb, ts, ax, ay, az, avx, avy, avz):
     return ax, ay, az, avx, avy, avz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_setup(t, att, p, b, datt):
     if body_kind(p, b) == PART_RIGID:
         rigid_setup(t, att, p, b, datt)
@@ -116,7 +116,7 @@ def body_setup(t, att, p, b, datt):
         point_setup(t, p, b)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_add_child(p, b, k, W, s0):
     """Add the eliminated child tether k (J_0 = W (s_0 + a_A)) to body b; nothing on a fixed body."""
     if p[int(p[H_OFF_BODY]) + b * BT_SIZE + BT_INV_M] == 0.0:
@@ -127,7 +127,7 @@ def body_add_child(p, b, k, W, s0):
         point_add_child(p, b, W, s0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_compliance(p, c, work):
     """Returns the determinant of what it inverted (0 or non-finite: singular)."""
     if body_kind(p, c) == PART_RIGID:
@@ -135,7 +135,7 @@ def body_compliance(p, c, work):
     return point_compliance(p, c)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_root_solve(p, b):
     """A root's accelerations into BS_A (zero on a fixed body); returns the determinant."""
     A = int(p[H_OFF_BSCR]) + b * BS_SIZE + BS_A
@@ -148,7 +148,7 @@ def body_root_solve(p, b):
     return point_root_solve(p, b)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_point_acceleration(p, b, ts):
     """Acceleration of the attachment point of the tether with scratch ts on body b."""
     if body_kind(p, b) == PART_RIGID:
@@ -157,7 +157,7 @@ def body_point_acceleration(p, b, ts):
     return p[A], p[A + 1], p[A + 2]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_back_substitute(p, c, jn):
     if body_kind(p, c) == PART_RIGID:
         rigid_back_substitute(p, c, jn)
@@ -165,7 +165,7 @@ def body_back_substitute(p, c, jn):
         point_back_substitute(p, c, jn)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_derivatives(att, p, b, datt):
     """False if a derivative came out non-finite."""
     if body_kind(p, b) == PART_RIGID:
@@ -173,7 +173,7 @@ def body_derivatives(att, p, b, datt):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_share(t, att, p, b, sh):
     """Body b's energy and momentum share (nothing for a fixed body)."""
     if not p[int(p[H_OFF_BODY]) + b * BT_SIZE + BT_M] > 0.0:
