@@ -17,44 +17,23 @@ import math
 import numpy as np
 
 from ._jit import njit
-from .model.params import ParamView
-from .bodies.rigid import gravity_gradient_potential, mat_t_vec, mat_vec
-from .kernel.effects import potential_per_mass
+from .bodies.parts import body_share
 from .kernel.layout import (
-    BS_ROT,
-    BS_R,
     BS_SIZE,
     BS_U,
-    BT_AOFF,
-    BT_JB,
-    BT_JS,
     BT_M,
-    BT_NW,
-    BT_RIGID,
     BT_SIZE,
-    BT_W0,
-    H_MU_GG,
     H_NBODY,
-    H_NQ,
     H_NQT,
     H_NRODS,
     H_NTETH,
     H_NWHEEL,
-    H_OFF_ATT,
     H_OFF_BODY,
     H_OFF_BSCR,
-    H_OFF_QUAD,
-    H_OFF_ROD,
     H_OFF_SCR,
     H_OFF_TETH,
-    H_OFF_WHL,
-    H_OFF_WT,
     H_MUTANT,
     MUT_NO_ELASTIC_E,
-    RT_EA,
-    RT_LU,
-    RT_M,
-    RT_SIZE,
     SJ_J,
     SJ_SIZE,
     SR_EPS,
@@ -65,19 +44,56 @@ from .kernel.layout import (
     TT_NRODS,
     TT_ROD0,
     TT_SIZE,
-    TT_TENSION_ONLY,
     WS_SAT,
     WS_SIZE,
     WS_TAU,
-    WT_AX,
-    WT_I,
-    WT_SIZE,
 )
-from .tether.chain import SQ3, next_joint, system_accelerations
+from .kernel.shares import SH_E, SH_KE, SH_SIZE, SH_VE, SH_VG
+from .tether.chain import chain_share
+from .tether.solve import system_accelerations
 
-# columns of the global diagnostics array
+# columns of the global diagnostics array: the parts' share vector (kernel/shares.py)
 G_PX, G_PY, G_PZ, G_HX, G_HY, G_HZ, G_KE, G_VG, G_VE, G_E, G_KROT = range(11)
-G_NCOL = 11
+G_NCOL = SH_SIZE
+
+
+@njit(cache=True)
+def row_shares(t, q, qd, att, p, sh, elastic):
+    """Add every part's energy and momentum share at one state (the scratch filled by a
+    right-hand side evaluation) to ``sh`` (kernel/shares.py): the bodies in kernel order, then the
+    tethers; then SH_E = KE + VG + VE."""
+    nbody = int(p[H_NBODY])
+    tscr = int(p[H_OFF_BSCR]) + nbody * BS_SIZE
+    for b in range(nbody):
+        body_share(t, att, p, b, sh)
+    for k in range(int(p[H_NTETH])):
+        ts_ = tscr + k * TS_SIZE
+        chain_share(
+            t, q, qd, p, k, elastic,
+            p[ts_ + TS_A], p[ts_ + TS_A + 1], p[ts_ + TS_A + 2], p[ts_ + TS_A + 3], p[ts_ + TS_A + 4], p[ts_ + TS_A + 5],
+            sh,
+        )
+    sh[SH_E] = sh[SH_KE] + sh[SH_VG] + sh[SH_VE]
+
+
+@njit(cache=True)
+def part_shares(t, q, qd, att, p, out, elastic):
+    """Each part's share on its own: out[b] for body b, out[nbody + k] for tether k (rows of
+    SH_SIZE, zeroed here).  The diagnostics add the same shares in this order."""
+    nbody = int(p[H_NBODY])
+    tscr = int(p[H_OFF_BSCR]) + nbody * BS_SIZE
+    for i in range(out.shape[0]):
+        for j in range(SH_SIZE):
+            out[i, j] = 0.0
+    for b in range(nbody):
+        body_share(t, att, p, b, out[b])
+    for k in range(int(p[H_NTETH])):
+        ts_ = tscr + k * TS_SIZE
+        chain_share(
+            t, q, qd, p, k, elastic,
+            p[ts_ + TS_A], p[ts_ + TS_A + 1], p[ts_ + TS_A + 2], p[ts_ + TS_A + 3], p[ts_ + TS_A + 4], p[ts_ + TS_A + 5],
+            out[nbody + k],
+        )
 
 
 @njit(cache=True)
@@ -85,9 +101,11 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc, datt, ctrl, wheels):
     """Fill ``glob`` (rows x G_NCOL), ``rods`` (rows x nrods x 2: strain, axial force),
     ``joints`` (rows x njoints x 3: reaction vectors J_k), ``ctrl`` (rows x nbody x 3: commanded
     control torque, body axes) and ``wheels`` (rows x nwheel x 2: motor torque, saturation flag)
-    for every state row of Y.  Rigid bodies add J omega + R h_w to the angular momentum and
-    1/2 w.J_s w + sum h_k^2/(2 I_k) to the kinetic energy (docs/model.md 12; also in G_KROT), the
-    gravity-gradient (MacCullagh) term to the potential.
+    for every state row of Y.  The global columns are the sum of every part's share
+    (bodies/point.py, bodies/rigid_body.py with its wheels, tether/rod.py per rod): rigid bodies
+    add J omega + R h_w to the angular momentum and 1/2 w.J_s w + sum h_k^2/(2 I_k) to the kinetic
+    energy (docs/model.md 12; also in G_KROT), the gravity-gradient (MacCullagh) term to the
+    potential.
 
     Returns the index of the first row whose right-hand side failed, or -1.
     """
@@ -96,21 +114,13 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc, datt, ctrl, wheels):
     nrods = int(p[H_NRODS])
     nteth = int(p[H_NTETH])
     nbody = int(p[H_NBODY])
-    offr = int(p[H_OFF_ROD])
     offt = int(p[H_OFF_TETH])
     offb = int(p[H_OFF_BODY])
     bscr = int(p[H_OFF_BSCR])
-    tscr = bscr + nbody * BS_SIZE
-    wscr = tscr + nteth * TS_SIZE
-    offw = int(p[H_OFF_WT])
+    wscr = bscr + nbody * BS_SIZE + nteth * TS_SIZE
     nwh = int(p[H_NWHEEL])
-    oatt = int(p[H_OFF_ATT])
-    whl = int(p[H_OFF_WHL]) - oatt
     scr = int(p[H_OFF_SCR])
-    offq = int(p[H_OFF_QUAD])
-    nq = int(p[H_NQ])
     jscr = scr + nrods * SR_SIZE
-    mu_gg = p[H_MU_GG]
     elastic = p[H_MUTANT] != MUT_NO_ELASTIC_E  # always true but in tetherlab.mutants' control
     for row in range(nrows):
         t = ts[row]
@@ -120,129 +130,29 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc, datt, ctrl, wheels):
         code = system_accelerations(t, q, qd, att, p, acc, datt)
         if code != 0:
             return row
-        px = 0.0
-        py = 0.0
-        pz = 0.0
-        hx = 0.0
-        hy = 0.0
-        hz = 0.0
-        ke = 0.0
-        krot = 0.0
-        vg = 0.0
-        ve = 0.0
+        sh = glob[row]
+        for j in range(G_NCOL):
+            sh[j] = 0.0
+        row_shares(t, q, qd, att, p, sh, elastic)
         for b in range(nbody):
-            bt = offb + b * BT_SIZE
-            m = p[bt + BT_M]
-            if not m > 0.0:
-                continue
-            bs = bscr + b * BS_SIZE
-            rx = p[bs + BS_R]
-            ry = p[bs + BS_R + 1]
-            rz = p[bs + BS_R + 2]
-            vx = p[bs + BS_R + 3]
-            vy = p[bs + BS_R + 4]
-            vz = p[bs + BS_R + 5]
-            px += m * vx
-            py += m * vy
-            pz += m * vz
-            hx += m * (ry * vz - rz * vy)
-            hy += m * (rz * vx - rx * vz)
-            hz += m * (rx * vy - ry * vx)
-            ke += 0.5 * m * (vx * vx + vy * vy + vz * vz)
-            vg += m * potential_per_mass(p, t, rx, ry, rz)
-            for j in range(3):
-                ctrl[row, b, j] = p[bs + BS_U + j]
-            if p[bt + BT_RIGID] == 0.0:
-                continue
-            ao = int(p[bt + BT_AOFF]) - oatt
-            wx = att[ao + 4]
-            wy = att[ao + 5]
-            wz = att[ao + 6]
-            jx, jy, jz = mat_vec(p, bt + BT_JS, wx, wy, wz)
-            er = 0.5 * (wx * jx + wy * jy + wz * jz)
-            w0 = int(p[bt + BT_W0])
-            for k in range(w0, w0 + int(p[bt + BT_NW])):
-                wt = offw + k * WT_SIZE
-                hk = att[whl + k]
-                jx += p[wt + WT_AX] * hk
-                jy += p[wt + WT_AX + 1] * hk
-                jz += p[wt + WT_AX + 2] * hk
-                er += 0.5 * hk * hk / p[wt + WT_I]
-            lx, ly, lz = mat_vec(p, bs + BS_ROT, jx, jy, jz)
-            hx += lx
-            hy += ly
-            hz += lz
-            ke += er
-            krot += er
-            if mu_gg > 0.0:
-                rbx, rby, rbz = mat_t_vec(p, bs + BS_ROT, rx, ry, rz)
-                vg += gravity_gradient_potential(p, bt + BT_JB, mu_gg, rbx, rby, rbz)
+            if p[offb + b * BT_SIZE + BT_M] > 0.0:
+                for j in range(3):
+                    ctrl[row, b, j] = p[bscr + b * BS_SIZE + BS_U + j]
         for k in range(nwh):
             wheels[row, k, 0] = p[wscr + k * WS_SIZE + WS_TAU]
             wheels[row, k, 1] = p[wscr + k * WS_SIZE + WS_SAT]
         for k in range(nteth):
             tb = offt + k * TT_SIZE
-            ts_ = tscr + k * TS_SIZE
             nk = int(p[tb + TT_NRODS])
             g0 = int(p[tb + TT_ROD0])
-            ax = p[ts_ + TS_A]
-            ay = p[ts_ + TS_A + 1]
-            az = p[ts_ + TS_A + 2]
-            avx = p[ts_ + TS_A + 3]
-            avy = p[ts_ + TS_A + 4]
-            avz = p[ts_ + TS_A + 5]
             for g in range(g0, g0 + nk):
-                rb = offr + g * RT_SIZE
-                m = p[rb + RT_M]
-                dx = q[3 + 3 * g]
-                dy = q[4 + 3 * g]
-                dz = q[5 + 3 * g]
-                ddx = qd[3 + 3 * g]
-                ddy = qd[4 + 3 * g]
-                ddz = qd[5 + 3 * g]
-                gx = ax + SQ3 * dx
-                gy = ay + SQ3 * dy
-                gz = az + SQ3 * dz
-                gvx = avx + SQ3 * ddx
-                gvy = avy + SQ3 * ddy
-                gvz = avz + SQ3 * ddz
-                px += m * gvx
-                py += m * gvy
-                pz += m * gvz
-                # TMED: masses m/2 at r_G -/+ d, so H = m r_G x v_G + m d x d'
-                hx += m * (gy * gvz - gz * gvy + dy * ddz - dz * ddy)
-                hy += m * (gz * gvx - gx * gvz + dz * ddx - dx * ddz)
-                hz += m * (gx * gvy - gy * gvx + dx * ddy - dy * ddx)
-                ke += 0.5 * m * (gvx**2 + gvy**2 + gvz**2 + ddx**2 + ddy**2 + ddz**2)
-                for j in range(2 * nq):
-                    xi = p[offq + j]
-                    w = p[offq + 2 * nq + j]
-                    s = 1.0 + xi
-                    vg += w * 0.5 * m * potential_per_mass(
-                        p, t, ax + s * SQ3 * dx, ay + s * SQ3 * dy, az + s * SQ3 * dz
-                    )
-                eps = p[scr + g * SR_SIZE + SR_EPS]
-                if elastic and (eps > 0.0 or p[tb + TT_TENSION_ONLY] == 0.0):  # slack: stores nothing
-                    ve += 0.5 * p[rb + RT_EA] * p[rb + RT_LU] * eps * eps
-                rods[row, g, 0] = eps
+                rods[row, g, 0] = p[scr + g * SR_SIZE + SR_EPS]
                 rods[row, g, 1] = p[scr + g * SR_SIZE + SR_FE]
-                ax, ay, az, avx, avy, avz = next_joint(q, qd, g, ax, ay, az, avx, avy, avz)
             for j in range(nk + 1):
                 jb = jscr + (g0 + k + j) * SJ_SIZE + SJ_J
                 joints[row, g0 + k + j, 0] = p[jb]
                 joints[row, g0 + k + j, 1] = p[jb + 1]
                 joints[row, g0 + k + j, 2] = p[jb + 2]
-        glob[row, G_PX] = px
-        glob[row, G_PY] = py
-        glob[row, G_PZ] = pz
-        glob[row, G_HX] = hx
-        glob[row, G_HY] = hy
-        glob[row, G_HZ] = hz
-        glob[row, G_KE] = ke
-        glob[row, G_VG] = vg
-        glob[row, G_VE] = ve
-        glob[row, G_E] = ke + vg + ve
-        glob[row, G_KROT] = krot
     return -1
 
 
@@ -253,7 +163,7 @@ def compute(model, ts: np.ndarray, Y: np.ndarray) -> dict:
     nr = model.n_rods
     nj = nr + len(model.tethers)
     nb = len(model.bodies)
-    nw = ParamView(p).n_wheels
+    nw = int(p[H_NWHEEL])
     glob = np.full((nrows, G_NCOL), np.nan)
     rods = np.full((nrows, nr, 2), np.nan)
     joints = np.full((nrows, nj, 3), np.nan)
@@ -268,6 +178,24 @@ def compute(model, ts: np.ndarray, Y: np.ndarray) -> dict:
             ctrl, wheels,
         )
     return {"global": glob, "rods": rods, "joints": joints, "control": ctrl, "wheels": wheels}
+
+
+def shares(model, t: float, y: np.ndarray) -> np.ndarray:
+    """Each part's own energy and momentum share at the state y: rows of G_NCOL (columns as the
+    global diagnostics, G_E left 0), one per body in kernel order then one per tether.  Their sum
+    is the diagnostics' global row."""
+    p = model.fresh_params()
+    nqt = model.n_qt
+    y = np.ascontiguousarray(y, float)
+    acc = np.zeros(nqt)
+    datt = np.zeros(y.size - 2 * nqt)
+    q, qd, att = y[:nqt], y[nqt : 2 * nqt], y[2 * nqt :]
+    code = system_accelerations(float(t), q, qd, att, p, acc, datt)
+    if code != 0:
+        raise ValueError(f"y: the right-hand side failed at this state (failure code {code})")
+    out = np.zeros((len(model.bodies) + len(model.tethers), G_NCOL))
+    part_shares(float(t), q, qd, att, p, out, p[H_MUTANT] != MUT_NO_ELASTIC_E)
+    return out
 
 
 def orbital_frame(r: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -163,7 +163,7 @@ MUTANTS = {
         Mutant(
             "eq20_printed_sign",
             "eq. 20 as printed: J_2 = I - (sqrt3 - 1) J(u) (transverse coefficient 2 - sqrt3)",
-            "tether/chain.py rod_forces (tether model code MODEL_PRINTED)",
+            "tether/rod.py rod_force (tether model code MODEL_PRINTED)",
             "docs/model.md 2.4 (misprint 1): the moment equation eq. 10 needs sqrt3",
             ("angular_momentum_internal", "lateral_mode_two_rods", "hard_cases_negative_control"),
             mutate=_printed,
@@ -172,7 +172,7 @@ MUTANTS = {
         Mutant(
             "eq19_doubled_ft_star",
             "eq. 19 read with the corrected J_2: 2 F_T* and J_2 (T_B - T_A) both kept (F_T* twice)",
-            "tether/chain.py rod_forces (p[H_MUTANT] = MUT_EQ19_DOUBLED)",
+            "tether/rod.py rod_force (p[H_MUTANT] = MUT_EQ19_DOUBLED)",
             "docs/model.md 2.4 (misprint 2): reaction moment (2 sqrt3 - 1)/sqrt3 of eq. 10",
             ("angular_momentum_internal", "lateral_mode_two_rods"),
             mutate=_flag(L.MUT_EQ19_DOUBLED),
@@ -181,7 +181,7 @@ MUTANTS = {
         Mutant(
             "ftp_dropped",
             "F_TP of eq. 13 dropped from the d equation: (R_2 - R_1) in place of u u^T (R_2 - R_1) + J(u) Q_lag",
-            "tether/chain.py rod_forces (p[H_MUTANT] = MUT_FTP_DROPPED)",
+            "tether/rod.py rod_force (p[H_MUTANT] = MUT_FTP_DROPPED)",
             "paper eqs. 11-13, 26; docs/model.md 3 (F_TP in closed form)",
             ("libration_inplane_frequency", "libration_outofplane_frequency"),
             mutate=_flag(L.MUT_FTP_DROPPED),
@@ -248,7 +248,7 @@ MUTANTS = {
         Mutant(
             "damping_sign",
             "the damping term of eq. 1 with the wrong sign: T = EA eps - D eps'",
-            "tether/chain.py rod_forces (p[H_MUTANT] = MUT_DAMPING_SIGN)",
+            "tether/rod.py rod_force (p[H_MUTANT] = MUT_DAMPING_SIGN)",
             "paper eq. 1; docs/model.md 6.2 (the power balance: damping dissipates D L_u eps'^2)",
             ("energy_model_power_balance",),
             mutate=_flag(L.MUT_DAMPING_SIGN),
@@ -278,7 +278,7 @@ MUTANTS = {
         Mutant(
             "rigid_attachment_not_rotated",
             "a tether's attachment vector on a rigid body used in body axes, not rotated to inertial",
-            "tether/chain.py attachment kinematics (p[H_MUTANT] = MUT_UNROTATED_ATTACHMENT)",
+            "bodies/rigid_body.py rigid_offset (p[H_MUTANT] = MUT_UNROTATED_ATTACHMENT)",
             "paper eq. 47 as corrected in docs/model.md section 12 (rho = R rho_b)",
             ("hub_spoke_radius_tip_over_bound", "hub_spoke_radius_defects_negative_control"),
             mutate=_flag(L.MUT_UNROTATED_ATTACHMENT),
@@ -287,7 +287,7 @@ MUTANTS = {
         Mutant(
             "rigid_centripetal_dropped",
             "omega x (omega x r) dropped from the attachment point's acceleration",
-            "tether/chain.py attachment kinematics (p[H_MUTANT] = MUT_NO_CENTRIPETAL)",
+            "bodies/rigid_body.py rigid_offset (p[H_MUTANT] = MUT_NO_CENTRIPETAL)",
             "paper eq. 47 (the rigid-body acceleration of a body-fixed point)",
             ("hub_spoke_radius_tip_over_bound", "hub_spoke_radius_defects_negative_control"),
             mutate=_flag(L.MUT_NO_CENTRIPETAL),

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 
 from .._jit import njit
+from ..kernel.vec3 import cross, mat_vec
 
 
 @njit(cache=True)
@@ -41,31 +42,6 @@ def quat_rate(qw, qx, qy, qz, wx, wy, wz):
         0.5 * (qw * wy + qz * wx - qx * wz),
         0.5 * (qw * wz + qx * wy - qy * wx),
     )
-
-
-@njit(cache=True)
-def mat_vec(p, off, x, y, z):
-    """R v with R = p[off:off+9] row-major."""
-    return (
-        p[off] * x + p[off + 1] * y + p[off + 2] * z,
-        p[off + 3] * x + p[off + 4] * y + p[off + 5] * z,
-        p[off + 6] * x + p[off + 7] * y + p[off + 8] * z,
-    )
-
-
-@njit(cache=True)
-def mat_t_vec(p, off, x, y, z):
-    """R^T v with R = p[off:off+9] row-major."""
-    return (
-        p[off] * x + p[off + 3] * y + p[off + 6] * z,
-        p[off + 1] * x + p[off + 4] * y + p[off + 7] * z,
-        p[off + 2] * x + p[off + 5] * y + p[off + 8] * z,
-    )
-
-
-@njit(cache=True)
-def cross(ax, ay, az, bx, by, bz):
-    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
 @njit(cache=True)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from .._jit import njit
 from ..kernel.layout import (
+    H_OFF_WT,
     WMODE_CONTROL,
     WMODE_TABLE,
     WT_AX,
@@ -21,6 +22,10 @@ from ..kernel.layout import (
     WT_TAU,
     WT_TN,
     WT_TOFF,
+    WS_SAT,
+    WS_SIZE,
+    WS_TAU,
+    WT_SIZE,
 )
 
 
@@ -74,3 +79,52 @@ def motor_torque(p, wb, t, h, wx, wy, wz, ux, uy, uz):
             tau = 0.0
             sat = 2
     return tau, sat
+
+
+@njit(cache=True)
+def wheel_set_torques(p, t, att, w0, nw, wbx, wby, wbz, ux, uy, uz, wscr, whl, datt):
+    """The wheel set of a body (wheels w0 .. w0+nw-1; body rate omega_b, commanded torque u, body
+    axes): every motor torque with its limits into the wheel scratch (torque, saturation flag) and,
+    when ``datt`` is not empty, into the wheels' derivatives h_k' = tau_k (eq. 46').  Returns the
+    body-axes sums h_w = sum a_k h_k and sum a_k tau_k that enter the body's eq. 45'."""
+    offw = int(p[H_OFF_WT])
+    hwx = 0.0
+    hwy = 0.0
+    hwz = 0.0
+    tqx = 0.0
+    tqy = 0.0
+    tqz = 0.0
+    for j in range(w0, w0 + nw):
+        wt = offw + j * WT_SIZE
+        h = att[whl + j]
+        tau, sat = motor_torque(p, wt, t, h, wbx, wby, wbz, ux, uy, uz)
+        p[wscr + j * WS_SIZE + WS_TAU] = tau
+        p[wscr + j * WS_SIZE + WS_SAT] = sat
+        if datt.shape[0] > 0:
+            datt[whl + j] = tau
+        a0 = p[wt + WT_AX]
+        a1 = p[wt + WT_AX + 1]
+        a2 = p[wt + WT_AX + 2]
+        hwx += a0 * h
+        hwy += a1 * h
+        hwz += a2 * h
+        tqx += a0 * tau
+        tqy += a1 * tau
+        tqz += a2 * tau
+    return hwx, hwy, hwz, tqx, tqy, tqz
+
+
+@njit(cache=True)
+def wheel_set_share(p, att, w0, nw, whl, jx, jy, jz, er):
+    """Add the wheel set's share to a body's angular momentum about G (body axes, J_s omega given
+    in (jx, jy, jz)) and rotational energy er: h_w = sum a_k h_k and sum h_k^2 / (2 I_k)
+    (docs/model.md 12.2)."""
+    offw = int(p[H_OFF_WT])
+    for k in range(w0, w0 + nw):
+        wt = offw + k * WT_SIZE
+        hk = att[whl + k]
+        jx += p[wt + WT_AX] * hk
+        jy += p[wt + WT_AX + 1] * hk
+        jz += p[wt + WT_AX + 2] * hk
+        er += 0.5 * hk * hk / p[wt + WT_I]
+    return jx, jy, jz, er

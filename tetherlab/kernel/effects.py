@@ -153,7 +153,7 @@ def _other_body(p, code, par, t, body, x, y, z, vx, vy, vz, mass):
     return fx, fy, fz
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rod_force_density(p, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
     neff = int(p[H_NEFF])
     off = int(p[H_OFF_EFF])

@@ -18,6 +18,7 @@ import math
 from numba import carray
 
 from .._jit import njit, rhs_cfunc
+from ..tether.rod import strain
 from .layout import (
     H_EV_STOP_R,
     H_NQT,
@@ -65,7 +66,7 @@ def event_values(t, y, g_ptr, p):
             dn = math.sqrt(dx * dx + dy * dy + dz * dz)
             lu = p[rb + RT_LU]
             ea = p[rb + RT_EA]
-            eps = 2.0 * SQ3 * dn / lu - 1.0
+            eps = strain(dn, lu)
             el = ea * eps
             damp = p[rb + RT_D]
             if damp != 0.0 and dn > 0.0:

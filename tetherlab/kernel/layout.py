@@ -57,6 +57,10 @@ FAIL_TEXT = {
     FAIL_SINGULAR: "singular reaction system",
 }
 
+# part kind of each body (bodies/parts.py dispatches every part function on it); the code lives in
+# the BT_RIGID slot, written once by build_model: PART_POINT = 0 (point mass), PART_RIGID = 1
+BT_PART = BT_RIGID; PART_POINT = 0; PART_RIGID = 1  # noqa: E702
+
 # -- body controls ---------------------------------------------------------------------------------
 CTRL_NONE = 0
 CTRL_ORBIT = 1     # hold the body's own orbit frame
