@@ -195,7 +195,7 @@ def parse_dispersion(raw: Any, scene_dict: dict, where: str = "") -> Dispersion:
             params[name] = float(value)
             continue
         q = _quantity(value, key, name)
-        if q is None:
+        if q is None or (q.unit.physical_type == "dimensionless" and not base_unit.physical_type == "dimensionless"):
             raise DispersionError(key, f"{name!r} with a unit of {base_unit.physical_type} (e.g. '{base}')",
                                   f"{value!r} (missing unit)")
         if not q.unit.is_equivalent(base_unit):

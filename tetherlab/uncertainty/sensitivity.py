@@ -77,7 +77,7 @@ def sobol_of_function(f: Callable[[np.ndarray], np.ndarray], dispersions: Sequen
     return sobol_indices([d.key for d in dispersions], y, seed=seed, level=level)
 
 
-def run_sensitivity(study, out_dir, *, scheduler=None, workers=None, progress=True) -> dict:
+def run_sensitivity(study, out_dir, *, scheduler=None, workers=None, progress=True, level: float = 0.95) -> dict:
     """The study's [sensitivity] through the sweep (cache under ``out_dir/cache``); writes
     ``sensitivity.json`` and ``sensitivity.csv``; returns ``{quantity: {key: indices}}``."""
     import json
@@ -114,9 +114,9 @@ def run_sensitivity(study, out_dir, *, scheduler=None, workers=None, progress=Tr
     for q in study.quantities:
         y = np.array([r.summary[q] for r in res.records])
         if sens["method"] == "sobol":
-            idx = sobol_indices(study.keys, y, seed=sens["seed"])
+            idx = sobol_indices(study.keys, y, seed=sens["seed"], level=level)
         else:
-            idx = morris_indices(study.keys, grid, y, sens["levels"], seed=sens["seed"])
+            idx = morris_indices(study.keys, grid, y, sens["levels"], seed=sens["seed"], level=level)
         out[q] = idx
         rows += [{"quantity": q, "key": k, **v} for k, v in idx.items()]
     Path(out_dir).mkdir(parents=True, exist_ok=True)
