@@ -342,8 +342,15 @@ def run_sweep(
         else:
             todo.setdefault((h, sname), []).append(i)
 
+    n_failed = sum(1 for r in records if r is not None and not r.ok)
+
     def finish(key: tuple[str, str], out: dict, lost: bool = False) -> None:
+        nonlocal n_failed
         h, sname = key
+        if not out["ok"]:
+            n_failed += len(todo[key])
+            if bar is not None:  # done and ETA are tqdm's own; the failures are ours
+                bar.set_postfix(failed=n_failed, refresh=False)
         for j, i in enumerate(todo[key]):
             rec = RunRecord(h, labels[i], params[i], out["ok"], dict(out["summary"]), out["error"],
                             out["wall_s"], cached=False, lost=lost)
@@ -359,6 +366,7 @@ def run_sweep(
         from tqdm import tqdm
 
         bar = tqdm(total=len(scenes), initial=n_cached, desc=description, unit="run", leave=True)
+        bar.set_postfix(failed=n_failed, refresh=False)
     try:
         if not jobs:
             pass
