@@ -1,5 +1,5 @@
 """The rigid body with its wheel set: one part of the reaction solve (paper eqs. 44-47;
-docs/model.md 12.2-12.5).  Kinematics helpers are in bodies/rigid.py, the wheel set in
+docs/model.md 12.2-12.5; eqs. 45-46 with the wheels, eq. 48-49 the attached tethers).  Kinematics helpers are in bodies/rigid.py, the wheel set in
 bodies/wheels.py, the control law in bodies/control.py.
 
 Its generalised acceleration a6 = (a_G, alpha) (inertial axes) obeys

@@ -5,6 +5,11 @@ r_G = r_A + sqrt3 d and its end B at r_B = r_A + 2 sqrt3 d (eq. 23), with d = q[
 :func:`rod_force` writes what the reaction solve needs into the rod's scratch: the half-rod loads
 R_1, R_2, the forcing Q of eq. 26 (= R* of eq. 32), C = J_2 = c1 I + c2 u u^T (eq. 20 corrected),
 u, F_E (eq. 1), the strain (eq. 2) and its rate.
+
+The equivalence of the rod and its two masses (eqs. 11-18): the pair F_T = F_TP + F_T* (eq. 11)
+with F_T* (eq. 12) folded into C and F_TP (eq. 13) from the moment's perpendicular part (eq. 14)
+through the projector J(u) = I - u u^T (eq. 15); the masses' equations (eqs. 16-17) summed give
+eq. 18 and subtracted eq. 19, whose printed double F_T* and J_2 sign docs/model.md corrects.
 """
 
 from __future__ import annotations

@@ -18,6 +18,11 @@ section 2.3; trees: docs/model.md section 12).  Every evaluation runs, in this o
 6. every body's own derivatives (body_derivatives: attitude; the wheels' are written in 2).
 
 Cost: linear in the total number of rods plus a constant per body.
+
+Paper equations: the joints (eqs. 21-22) are built into the coordinates (eq. 23), so their
+reactions J_k are the unknowns; the tip (eqs. 24, 29, 31) and each rod (eqs. 25-28, 30, 32-34)
+form the tether's system L; a point root couples it through eqs. 35-39 (one tether) or eqs. 40-43
+(hub and spoke), a rigid root through eqs. 44-49.
 """
 
 from __future__ import annotations

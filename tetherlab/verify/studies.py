@@ -94,7 +94,7 @@ def _hard_cases_gates(outdir: Path) -> dict:
         "hard_cases_collapse_stop_spread": s["stop_time_spread_s"],
         # the control must exceed its bound; the gate reads bound / measured (<= 1 passes)
         "hard_cases_negative_control": (1.0 / control) if control else math.inf,
-        # issue 11: n = 512 over an orbit (part 5), and its anti-damped control (inverted likewise)
+        # n = 512 over an orbit (docs/verification.md 5), and its anti-damped control (inverted likewise)
         "hard_cases_n512_stability": s["n512_stability"] if s.get("n512_stability") is not None else math.inf,
         "hard_cases_n512_negative_control": _inverse(s.get("n512_control_stability")),
     }
@@ -107,7 +107,7 @@ def _inverse(v):
 
 
 def _rigid_bodies_gates(outdir: Path) -> dict:
-    """Gates of studies/rigid_bodies.py (issue 10; bounds in docs/rigid-oracles.md section 7).
+    """Gates of studies/rigid_bodies.py (bounds in docs/rigid-oracles.md section 7).
     A part the build cannot run (no rigid bodies) leaves its gates None: "not measured"."""
     g = json.loads((outdir / "rigid_bodies_summary.json").read_text())["gates"]
     return {
@@ -141,9 +141,9 @@ STUDIES = [
     ("Rod-count convergence", "convergence", ["--quiet"], "convergence.md", None),
     ("What accuracy costs in time (work-precision)", "workprecision", ["--quiet"], "work_precision.md", None),
     ("Hard cases", "hard_cases", ["--quiet"], "hard_cases.md", _hard_cases_gates),
-    ("Fidelity ladder: the de-orbit at each environment level (issue 13)", "fidelity", ["--quiet"], "fidelity.md", None),
-    ("Rigid bodies, wheels, attitude control and tether trees (issue 10)", "rigid_scenes", [], "rigid_scenes.md", None),
-    ("Rigid bodies, wheels and hub-and-spoke against the oracles (issue 10)", "rigid_bodies", ["--quiet"],
+    ("Fidelity ladder: the de-orbit at each environment level (docs/environment.md)", "fidelity", ["--quiet"], "fidelity.md", None),
+    ("Rigid bodies, wheels, attitude control and tether trees (docs/model.md 12)", "rigid_scenes", [], "rigid_scenes.md", None),
+    ("Rigid bodies, wheels and hub-and-spoke against the oracles (docs/rigid-oracles.md)", "rigid_bodies", ["--quiet"],
      "rigid_bodies.md", _rigid_bodies_gates),
 ]
 
