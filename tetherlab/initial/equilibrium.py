@@ -19,23 +19,23 @@ from ..system import center_of_mass
 def rigidly_rotating(model, y0, d, W, r_ref, reference, root_name, tethers):
     """y0 with the rod vectors ``d`` (nrods x 3), the reference point at ``r_ref`` and every point
     rotating rigidly with ``W`` about the centre of the central body."""
-    h = y0.size // 2
+    lay = model.state  # a star of point masses: y = [r0, d, v0, d'] (equilibrium starts are refused elsewhere)
     y = y0.copy()
-    y[3:h] = d.ravel()
+    y[lay.rods_d] = d.ravel()
     if reference == "center_of_mass":
-        y[:3] = 0.0
+        y[lay.root_r] = 0.0
         c, _ = center_of_mass(model, y)
     elif reference == root_name:
         c = np.zeros(3)
     else:
         from ..system import point_positions
 
-        y[:3] = 0.0
+        y[lay.root_r] = 0.0
         k = [t.to_body for t in tethers].index(reference)
         c = point_positions(model, y)["joints"][k][-1]
-    y[:3] = r_ref - c if reference != root_name else r_ref
-    y[h : h + 3] = np.cross(W, y[:3])
-    y[h + 3 :] = np.cross(W, d).ravel()
+    y[lay.root_r] = r_ref - c if reference != root_name else r_ref
+    y[lay.root_v] = np.cross(W, y[lay.root_r])
+    y[lay.rods_dd] = np.cross(W, d).ravel()
     return y
 
 
@@ -56,18 +56,18 @@ def quasi_static(model, y0, r_ref, reference, root_name, tethers):
     from ..formulations.cowell import cowell_rhs_py
 
     nrods = model.n_rods
-    h = y0.size // 2
-    r0 = y0[:3]
-    W = np.cross(r0, y0[h : h + 3]) / float(r0 @ r0)  # the rigid rotation of the equilibrium
+    lay = model.state
+    r0 = y0[lay.root_r]
+    W = np.cross(r0, y0[lay.root_v]) / float(r0 @ r0)  # the rigid rotation of the equilibrium
     w2 = float(W @ W)
-    d0 = y0[3:h].reshape(nrods, 3)
+    d0 = y0[lay.rods_d].reshape(nrods, 3)
     size = 2 * math.sqrt(3) * float(np.linalg.norm(d0, axis=1).sum())
     dscale = float(np.max(np.linalg.norm(d0, axis=1)))
 
     def residual(x):
         d = x.reshape(nrods, 3)
         y = rigidly_rotating(model, y0, d, W, r_ref, reference, root_name, tethers)
-        acc = cowell_rhs_py(model, y)[h + 3 :].reshape(nrods, 3)
+        acc = cowell_rhs_py(model, y)[lay.rods_dd].reshape(nrods, 3)
         return (acc - np.cross(W, np.cross(W, d))).ravel() / (w2 * size)
 
     x = d0.ravel().copy()
@@ -109,10 +109,10 @@ def relative_equilibrium(model, y0, r_ref, v_ref, omega, reference, root_name, t
     from ..formulations.cowell import cowell_rhs_py
 
     nrods = model.n_rods
-    h = y0.size // 2
+    lay = model.state
     zhat = omega / np.linalg.norm(omega)
     w0 = float(np.linalg.norm(omega))
-    d0 = y0[3:h].reshape(nrods, 3).copy()
+    d0 = y0[lay.rods_d].reshape(nrods, 3).copy()
     size = 2 * math.sqrt(3) * float(np.linalg.norm(d0, axis=1).sum())  # whole tether length
 
     def build(x):
@@ -122,9 +122,9 @@ def relative_equilibrium(model, y0, r_ref, v_ref, omega, reference, root_name, t
     def residual(x):
         y, W = build(x)
         dy = cowell_rhs_py(model, y)
-        acc = dy[h:]
-        r0 = y[:3]
-        d = y[3:h].reshape(nrods, 3)
+        acc = dy[lay.qd]
+        r0 = y[lay.root_r]
+        d = y[lay.rods_d].reshape(nrods, 3)
         res = np.empty(nrods + 1)
         a_rel0 = acc[:3] - np.cross(W, np.cross(W, r0))
         res[0] = a_rel0 @ r0 / np.linalg.norm(r0) / (w0 * w0 * np.linalg.norm(r0))

@@ -62,10 +62,10 @@ def star_state(scene, graph, model: Model, mu: float, eq_model: Model | None = N
             rod_vel.append((vt - v0) / (2 * math.sqrt(3) * t.rods))
             sides.append(1.0)
         y0 = chain_state(model, r0, v0, dirs, strains, None)
-        h = y0.size // 2
+        lay = model.state
         for k, sl in enumerate(model.rod_slices):
             for g in range(sl.start, sl.stop):
-                y0[h + 3 + 3 * g : h + 6 + 3 * g] = rod_vel[k]
+                y0[lay.rod_rate(g)] = rod_vel[k]
         return y0, r0, v0, sides
 
     # 2. the reference point's orbit: [orbit] block, or the root's own state
@@ -106,9 +106,9 @@ def star_state(scene, graph, model: Model, mu: float, eq_model: Model | None = N
         c = point_positions(model, y0)["joints"][k][-1]
     r0 = r_ref - c
     v0 = v_ref + (np.cross(omega, r0 - r_ref) if omega is not None else 0.0)
-    h = y0.size // 2
-    y0[:3] = r0
-    y0[h : h + 3] = v0
+    lay = model.state
+    y0[lay.root_r] = r0
+    y0[lay.root_v] = v0
     if motion in ("equilibrium", "quasi-static"):
         y0 = relative_equilibrium(eq_model or model, y0, r_ref, v_ref, omega, reference, root_name, tethers)
     if motion == "quasi-static":
