@@ -34,6 +34,7 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..kernel.vec3 import inv3  # real or complex blocks: the complex shift of RADAU5's second system
 from ..kernel.layout import (
     FORM_COWELL,
     FORM_COWELL_ORBIT,
@@ -188,28 +189,6 @@ def _free_parent(p, parent):
     if parent <= int(p[H_NTETH]):
         return True  # a tether's tip body (structure_supported: a point mass)
     return p[int(p[H_OFF_BODY]) + parent * BT_SIZE + BT_INV_M] > 0.0
-
-
-@njit(cache=True)
-def _inv3(a, out):
-    """out = a^-1 for a flat row-major 3x3 (real or complex); returns the determinant."""
-    c00 = a[4] * a[8] - a[5] * a[7]
-    c01 = a[5] * a[6] - a[3] * a[8]
-    c02 = a[3] * a[7] - a[4] * a[6]
-    det = a[0] * c00 + a[1] * c01 + a[2] * c02
-    if det == 0.0:
-        return det
-    inv = 1.0 / det
-    out[0] = c00 * inv
-    out[1] = (a[2] * a[7] - a[1] * a[8]) * inv
-    out[2] = (a[1] * a[5] - a[2] * a[4]) * inv
-    out[3] = c01 * inv
-    out[4] = (a[0] * a[8] - a[2] * a[6]) * inv
-    out[5] = (a[2] * a[3] - a[0] * a[5]) * inv
-    out[6] = c02 * inv
-    out[7] = (a[1] * a[6] - a[0] * a[7]) * inv
-    out[8] = (a[0] * a[4] - a[1] * a[3]) * inv
-    return det
 
 
 @njit(cache=True)
@@ -389,7 +368,7 @@ def factor(p, blk, g, fac):
                 for c in range(9):
                     s[c] += maa[c] + bn[B_KV + c] + bn[B_KEL + c] * ginv
                 _sub_qsq(s, fn, tmp)
-            det = _inv3(s, tmp)
+            det = inv3(s, 0, tmp, 0)
             if det == 0.0 or not np.isfinite(abs(det)):
                 return 1
             for c in range(9):
@@ -403,7 +382,7 @@ def factor(p, blk, g, fac):
                 row[c] += maa[c] + b[B_KV + c] + b[B_KEL + c] * ginv
             _sub_qsq(row, fac[g0], tmp)
     for i in range(nroot):
-        det = _inv3(acc[int(p[offroots + i])], tmp)
+        det = inv3(acc[int(p[offroots + i])], 0, tmp, 0)
         if det == 0.0 or not np.isfinite(abs(det)):
             return 1
         for c in range(9):
