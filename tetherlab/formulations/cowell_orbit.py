@@ -4,7 +4,7 @@ Why: RADAU5's simplified Newton iteration uses one Jacobian for the three stages
 stiff axial force of a rod acts along the rod, and in the inertial frame a tether on a circular
 orbit turns at the orbital rate Omega, so the stiff direction turns by Omega h within a step.  The
 iteration's contraction then grows like h^4 (the rotated axial stiffness couples into the soft
-lateral directions; docs/integrators.md section 9) and limits the step to a few seconds on a
+lateral directions; docs/integrators.md section 11) and limits the step to a few seconds on a
 many-rod tether, far below what the error allows.  In a frame turning with the orbit the tether is
 nearly at rest: only its libration and the drift of the orbit's rate turn it, and the same
 Jacobian serves the whole step.
