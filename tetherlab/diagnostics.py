@@ -169,9 +169,9 @@ def compute(model, ts: np.ndarray, Y: np.ndarray) -> dict:
     joints = np.full((nrows, nj, 3), np.nan)
     ctrl = np.full((nrows, nb, 3), np.nan)
     wheels = np.full((nrows, nw, 2), np.nan)
-    nqt = model.n_qt
-    acc = np.zeros(nqt)
-    datt = np.zeros(Y.shape[1] - 2 * nqt)
+    lay = model.state
+    acc = np.zeros(lay.n_qt)
+    datt = np.zeros(lay.n_attitude + lay.n_wheels)
     if nrows:
         evaluate_rows(
             np.ascontiguousarray(ts, float), np.ascontiguousarray(Y, float), p, glob, rods, joints, acc, datt,
@@ -185,11 +185,11 @@ def shares(model, t: float, y: np.ndarray) -> np.ndarray:
     global diagnostics, G_E left 0), one per body in kernel order then one per tether.  Their sum
     is the diagnostics' global row."""
     p = model.fresh_params()
-    nqt = model.n_qt
+    lay = model.state
     y = np.ascontiguousarray(y, float)
-    acc = np.zeros(nqt)
-    datt = np.zeros(y.size - 2 * nqt)
-    q, qd, att = y[:nqt], y[nqt : 2 * nqt], y[2 * nqt :]
+    acc = np.zeros(lay.n_qt)
+    datt = np.zeros(lay.n_attitude + lay.n_wheels)
+    q, qd, att = y[lay.q], y[lay.qd], y[lay.first_order]
     code = system_accelerations(float(t), q, qd, att, p, acc, datt)
     if code != 0:
         raise ValueError(f"y: the right-hand side failed at this state (failure code {code})")

@@ -401,18 +401,17 @@ def segment_plan(prep: Prepared, p: np.ndarray) -> SegmentPlan:
     if prep.formulation == "cowell-orbit":
         from .formulations import cowell_orbit as co
 
-        nqt = lay.n_qt
         quats = [lay.quaternion_of(b).start for b, _ in lay.rigid]
-        pe = co.attach(p, co.frame_rate(prep.y0, nqt), 0.0)
+        pe = co.attach(p, co.frame_rate(prep.y0, lay), 0.0)
 
         def enter(t_a, y):
-            omega = co.frame_rate(y, nqt)
+            omega = co.frame_rate(y, lay)
             co.set_frame(pe, omega, t_a)
-            return co.to_frame(0.0, y, omega, nqt, quats), (t_a, omega)
+            return co.to_frame(0.0, y, omega, lay, quats), (t_a, omega)
 
         def leave(ctx, t, Z):
             t_a, omega = ctx
-            return co.to_inertial(np.asarray(t) - t_a, Z, omega, nqt, quats) if len(t) else Z
+            return co.to_inertial(np.asarray(t) - t_a, Z, omega, lay, quats) if len(t) else Z
 
         seg = ANCHOR_ORBITS * prep.ref_period_s if math.isfinite(prep.ref_period_s) else math.inf
         return SegmentPlan(pe, co.cowell_orbit_rhs, events, prep.atol, _second_order(prep.model), seg, enter,
