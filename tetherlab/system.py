@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from .bodies.registry import part_of
 from .forces.registry import EffectSpec
 from .model import params as P
 from .model import topology
@@ -86,6 +87,7 @@ class BodySpec:
     mass_kg: float
     fixed: bool = False
     rigid: RigidSpec | None = None
+    part: str = ""  # its part type (bodies/registry.py); "": rigid with a rigid table, else point
 
 
 @dataclass
@@ -325,10 +327,10 @@ def build_model(
         bv.n_children = sum(1 for t in tethers if t.parent == body.name and body.name)
         if 1 <= b <= nteth:
             bv.child_point_m = tethers[b - 1].to_point_m
+        bv.rigid = float(part_of(body).code)  # the BT_PART slot the part dispatcher reads
         if body.rigid is None:
             continue
         rs = body.rigid
-        bv.rigid = 1.0
         bv.attitude_index = rigid_index[b] = state.attitude_of(b).start
         JB = np.asarray(rs.inertia_kg_m2, float)
         JS = JB.copy()

@@ -48,7 +48,7 @@ from ..kernel.layout import (
     BS_SIZE,
     BS_ROT,
     BS_V,
-    BT_PART,
+    BT_AOFF,
     BT_QOFF,
     BT_SIZE,
     FAIL_NONFINITE,
@@ -64,7 +64,6 @@ from ..kernel.layout import (
     H_OFF_ROOTS,
     H_OFF_SCR,
     H_OFF_TETH,
-    PART_RIGID,
     SJ_J,
     SJ_S,
     SJ_SINV,
@@ -268,6 +267,6 @@ def joint_states(q, qd, att, p, out, bodies, rot):
         bs = bscr + b * BS_SIZE
         for j in range(6):
             bodies[b, j] = p[bs + BS_R + j]
-        if int(p[offb + b * BT_SIZE + BT_PART]) == PART_RIGID:
+        if p[offb + b * BT_SIZE + BT_AOFF] >= 0.0:  # a body with an attitude keeps its rotation
             for j in range(9):
                 rot[b, j] = p[bs + BS_ROT + j]
