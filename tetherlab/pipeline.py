@@ -517,9 +517,10 @@ def run_segments(prep: Prepared, plan: SegmentPlan, progress=None, store=None):
                                events=tuple(events))  # fmt: skip
 
 
-def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
+def _integrate_dromo(prep: Prepared, p: np.ndarray, progress, store=None):
     """The sigma form of DROMO (a point mass): its own driver schedules the outputs in physical
-    time (propagation/dromo.py); rows [r, v] are Cowell states of the single body."""
+    time (propagation/dromo.py); rows [r, v] are Cowell states of the single body.  ``store``
+    (tetherlab/runstore.py): rows streamed and the loop checkpointed between its compiled calls."""
     from .formulations import dromo
     from .model.params import FORM_DROMO_SIGMA
     from .propagation import dromo as drive
@@ -532,7 +533,7 @@ def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
     res = drive.integrate_sigma(
         prep.method, pe, r0, v0, prep.t_out, prep.rtol,
         prep.atol[0] / prep.ref_radius_m, prep.mu_m3_s2, length_m, max_steps=prep.max_steps,
-        progress=progress,
+        progress=progress, store=store,
     )  # fmt: skip
     return res, pe
 
