@@ -40,7 +40,7 @@ from tetherlab.forces import EFFECTS
 from tetherlab.formulations.cowell import cowell_rhs
 from tetherlab.model.params import ParamView
 from tetherlab.system import TetherSpec, build_model, center_of_mass, chain_state, point_positions, tolerance_scales
-from tetherlab.tether.chain import accelerations
+from tetherlab.tether.solve import accelerations
 
 SQ3 = math.sqrt(3.0)
 MU = 3.986004418e14  # m^3/s^2, Earth (the scenes' "earth" preset, WGS 84: tetherlab/scene.py)

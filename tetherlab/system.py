@@ -453,7 +453,7 @@ def _state_parts(model: Model, y: np.ndarray):
 def point_positions(model: Model, y: np.ndarray) -> dict:
     """Inertial positions/velocities of the bodies, rod centres, joints and tips for one state
     (eq. 23), from the compiled kinematics of the forest (tether/chain.py: forward)."""
-    from .tether.chain import joint_states
+    from .tether.solve import joint_states
 
     nr = model.n_rods
     q, qd, att = _state_parts(model, y)

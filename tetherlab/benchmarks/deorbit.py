@@ -108,7 +108,7 @@ def bench_rows() -> list[dict]:
 
 
 #: The many-rod mission: RADAU5 in the frame turning with the orbit, from the
-#: quasi-static start (docs/integrators.md section 9).
+#: quasi-static start (docs/integrators.md section 11).
 RODS_SETTINGS = {"integrator.method": "radau5", "integrator.formulation": "cowell-orbit",
                  "orbit.motion": "quasi-static", "integrator.rtol": 1e-8, "integrator.atol": 1e-8}  # fmt: skip
 

@@ -56,7 +56,7 @@ from numba import carray
 
 from .._jit import njit, rhs_cfunc
 from ..kernel.layout import FORM_COWELL_ORBIT, H_FORM, H_LEN, H_NQT, H_NRIGID, H_NSTATE, H_OFF_ATT, H_OFF_FORM
-from ..tether.chain import system_accelerations
+from ..tether.solve import system_accelerations
 
 OP_W = 0
 OP_T0 = 3

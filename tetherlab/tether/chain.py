@@ -272,15 +272,3 @@ def chain_share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh):
         rod_share(t, q, qd, p, g, tension_only, elastic, ax, ay, az, avx, avy, avz, sh)
         ax, ay, az, avx, avy, avz = next_joint(q, qd, g, ax, ay, az, avx, avy, avz)
 
-
-_SOLVE_NAMES = ("system_accelerations", "accelerations", "forward", "rod_forces", "tip_position_velocity", "joint_states")
-
-
-def __getattr__(name):
-    # the forest driver moved to tether/solve.py; callers that import it from here keep working
-    # (solve.py imports this module, so it cannot be imported at the top)
-    if name in _SOLVE_NAMES:
-        from . import solve
-
-        return getattr(solve, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
