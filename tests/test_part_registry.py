@@ -1,7 +1,8 @@
-"""The body parts' registry (tetherlab/bodies/registry.py) and its generated dispatcher.
+"""The part registries (tetherlab/bodies/registry.py, tetherlab/tether/registry.py) and their
+generated dispatchers (tetherlab/model/dispatch.py).
 
-* bodies/parts.py is what the generator makes of the registry today (so a part table edited
-  without regenerating fails here, naming the command);
+* bodies/parts.py and tether/parts.py are what the generator makes of the registries today (so a
+  part table edited without regenerating fails here, naming the command);
 * the generator refuses a table or a part module it cannot dispatch, naming what is wrong;
 * a new part type is its own module plus one registration line: a toy part (a point body whose
   mass counts twice, written as its own module) is added to a copy of the package that way,
@@ -22,17 +23,35 @@ from pathlib import Path
 
 import pytest
 
-from tetherlab.bodies import generate, registry
+from tetherlab.bodies import registry
 from tetherlab.bodies.registry import PartType
+from tetherlab.model import dispatch
+from tetherlab.tether import registry as tether_registry
 
 from .helpers import ROOT
 
 
-def test_the_dispatcher_is_generated_from_the_registry():
-    assert generate.TARGET.read_text() == generate.render(), (
-        "bodies/parts.py is out of date with bodies/registry.py: run python -m tetherlab.bodies.generate"
+@pytest.mark.parametrize("family", dispatch.FAMILIES, ids=lambda f: f.name)
+def test_the_dispatcher_is_generated_from_the_registry(family):
+    assert family.target.read_text() == dispatch.render(family), (
+        f"{family.target} is out of date with its registry: run python -m tetherlab.model.dispatch"
     )
-    assert generate.main(["--check"]) == 0
+
+
+def test_the_check_command_passes_on_the_checked_in_dispatchers():
+    assert dispatch.out_of_date() == [] and dispatch.main(["--check"]) == 0
+
+
+def test_one_tether_part_is_a_direct_call_and_a_second_adds_branches(tmp_path):
+    # with the rod chain alone no kind is read; a second tether part type (a reel, say) adds one
+    # branch to each tether dispatcher, the chain staying the default
+    text = dispatch.render(dispatch.TETHER)
+    assert "kind ==" not in text and "return _chain_walk(t, q, qd, p, k" in text
+    folder = tmp_path / "tether"
+    shutil.copytree(ROOT / "tetherlab" / "tether", folder)
+    (folder / "reel.py").write_text("".join(f"def {v}({sig}):\n    pass\n" for v, sig in tether_registry.INTERFACE.items()))
+    two = dispatch.render(dispatch.TETHER, tether_registry.PARTS + (PartType(1, "reel", "reel"),), folder)
+    assert two.count("kind == 1:") == len(tether_registry.INTERFACE) and "from .reel import (" in two
 
 
 def test_one_more_line_adds_a_branch_to_every_dispatcher(tmp_path):
@@ -43,8 +62,8 @@ def test_one_more_line_adds_a_branch_to_every_dispatcher(tmp_path):
     (bodies / "toy.py").write_text("from .point import *  # noqa\n" + "".join(
         f"def {v}({sig}):\n    pass\n" for v, sig in registry.INTERFACE.items()))
     parts = registry.PARTS + (PartType(7, "toy", "toy"),)
-    text = generate.render(parts, bodies)
-    assert text != generate.render(registry.PARTS, bodies)
+    text = dispatch.render(dispatch.BODY, parts, bodies)
+    assert text != dispatch.render(dispatch.BODY, registry.PARTS, bodies)
     assert text.count("kind == 7:") == len(registry.INTERFACE)
     assert "from .toy import (" in text
 
@@ -55,10 +74,12 @@ def test_one_more_line_adds_a_branch_to_every_dispatcher(tmp_path):
     (registry.PARTS + (PartType(-1, "neg", "point"),), "expected an int >= 0"),
     (registry.PARTS + (PartType(5, "gone", "no_such_module"),), "no_such_module.py: no such module"),
     ((), "at least one part type"),
+    ((PartType(0, "point", "point"), PartType(1, "rigid", "rigid_body"), PartType(2, "x", "point"),
+      PartType(3, "x", "rigid_body")), "'x': the name is already taken"),
 ])
 def test_a_table_that_cannot_dispatch_is_refused(parts, what):
     with pytest.raises(ValueError, match=what):
-        generate.render(parts)
+        dispatch.render(dispatch.BODY, parts)
 
 
 def test_a_part_module_without_the_interface_is_refused(tmp_path):
@@ -69,17 +90,21 @@ def test_a_part_module_without_the_interface_is_refused(tmp_path):
     sigs["setup"] = "t, p, b"
     (bodies / "half.py").write_text("".join(f"def {v}({sig}):\n    pass\n" for v, sig in sigs.items()))
     with pytest.raises(ValueError) as err:
-        generate.render(registry.PARTS + (PartType(3, "half", "half"),), bodies)
+        dispatch.render(dispatch.BODY, registry.PARTS + (PartType(3, "half", "half"),), bodies)
     assert "half.py: expected a function share(t, att, p, b, sh), found none" in str(err.value)
     assert "half.py: setup: expected arguments (t, att, p, b, datt), got (t, p, b)" in str(err.value)
 
 
-def test_a_body_names_a_part_type_that_exists():
-    from tetherlab.system import BodySpec
+def test_a_body_or_tether_names_a_part_type_that_exists():
+    from tetherlab.system import BodySpec, TetherSpec
 
     assert registry.part_of(BodySpec("a", 1.0)).name == "point"
     with pytest.raises(ValueError, match="part: expected one of .*'point', 'rigid'.*got 'reel'"):
         registry.part_of(BodySpec("a", 1.0, part="reel"))
+    t = TetherSpec("t", 2, 10.0, 1e4, 1.0)
+    assert tether_registry.part_of(t).name == "chain"
+    with pytest.raises(ValueError, match="part: expected one of \\['chain'\\], got 'rope'"):
+        tether_registry.part_of(TetherSpec("t", 2, 10.0, 1e4, 1.0, part="rope"))
 
 
 # -- a toy part type, added the way the registry says ----------------------------------------------
@@ -184,7 +209,7 @@ def test_a_toy_part_type_is_one_module_and_one_line(tmp_path):
     assert last in text
     reg.write_text(text.replace(last, last + '    PartType(2, "double", "double"),\n'))  # the one line
     env = dict(os.environ, PYTHONPATH=str(tmp_path), TETHERLAB_CACHE_DIR=str(tmp_path / "cache"))
-    gen = subprocess.run([sys.executable, "-m", "tetherlab.bodies.generate"], cwd=tmp_path, env=env,
+    gen = subprocess.run([sys.executable, "-m", "tetherlab.model.dispatch"], cwd=tmp_path, env=env,
                          capture_output=True, text=True)
     assert gen.returncode == 0, gen.stderr
     assert "kind == 2:" in (pkg / "bodies" / "parts.py").read_text()

@@ -49,7 +49,7 @@ from .kernel.layout import (
     WS_TAU,
 )
 from .kernel.shares import SH_E, SH_KE, SH_SIZE, SH_VE, SH_VG
-from .tether.chain import chain_share
+from .tether.parts import tether_share
 from .tether.solve import system_accelerations
 
 # columns of the global diagnostics array: the parts' share vector (kernel/shares.py)
@@ -68,7 +68,7 @@ def row_shares(t, q, qd, att, p, sh, elastic):
         body_share(t, att, p, b, sh)
     for k in range(int(p[H_NTETH])):
         ts_ = tscr + k * TS_SIZE
-        chain_share(
+        tether_share(
             t, q, qd, p, k, elastic,
             p[ts_ + TS_A], p[ts_ + TS_A + 1], p[ts_ + TS_A + 2], p[ts_ + TS_A + 3], p[ts_ + TS_A + 4], p[ts_ + TS_A + 5],
             sh,
@@ -89,7 +89,7 @@ def part_shares(t, q, qd, att, p, out, elastic):
         body_share(t, att, p, b, out[b])
     for k in range(int(p[H_NTETH])):
         ts_ = tscr + k * TS_SIZE
-        chain_share(
+        tether_share(
             t, q, qd, p, k, elastic,
             p[ts_ + TS_A], p[ts_ + TS_A + 1], p[ts_ + TS_A + 2], p[ts_ + TS_A + 3], p[ts_ + TS_A + 4], p[ts_ + TS_A + 5],
             out[nbody + k],

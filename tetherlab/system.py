@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from .bodies.registry import part_of
+from .tether.registry import part_of as tether_part_of
 from .forces.registry import EffectSpec
 from .model import params as P
 from .model import topology
@@ -46,6 +47,7 @@ class TetherSpec:
     from_point_m: tuple = (0.0, 0.0, 0.0)  # attachment of A_1 on the parent, body axes (rigid)
     to_point_m: tuple = (0.0, 0.0, 0.0)  # attachment of B_n on the child, body axes (rigid)
     reversed: bool = False  # the scene writes it child -> parent: outputs flip it back
+    part: str = ""  # its part type (tether/registry.py); "": the rod chain
 
 
 @dataclass(frozen=True)
@@ -291,6 +293,7 @@ def build_model(
         tv.parent = index[t.parent]
         tv.child = 1 + k if bodies[1 + k].name and bodies[1 + k].mass_kg > 0 else -1
         tv.parent_point_m = t.from_point_m
+        tv.part = tether_part_of(t).code  # the TT_PART slot the tether dispatcher reads
         rod_slices.append(slice(g, g + t.rods))
         for _ in range(t.rods):
             rv = v.rod(g)

@@ -5,10 +5,10 @@ A part type is one module in tetherlab/bodies/ that defines the part interface (
 virtual calls, so the dispatcher that chooses a part's function by the body's kind code
 (bodies/parts.py) is generated from this table: after adding a line, run
 
-    python -m tetherlab.bodies.generate
+    python -m tetherlab.model.dispatch
 
 and commit the regenerated bodies/parts.py with it (tests/test_part_registry.py fails while the two
-disagree).  build_model writes each body's code into its BT_PART slot, from the body's ``part``
+disagree).  The tethers have the same shape: tether/registry.py, tether/parts.py.  build_model writes each body's code into its BT_PART slot, from the body's ``part``
 name (a BodySpec without one: ``rigid`` if it has a rigid table, else ``point``).
 
 This module imports nothing of tetherlab, so the generator reads it on a package whose dispatcher

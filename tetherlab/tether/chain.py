@@ -72,7 +72,8 @@ from ..kernel.layout import (
 from ..kernel.vec3 import add_iuu, inv3, iuu_vec, mat_vec, sub_iuu_sandwich
 from .rod import SQ3, fail, next_joint, rod_force, rod_share
 
-__all__ = ["SQ3", "next_joint", "chain_walk", "chain_reduce", "chain_back_substitute", "chain_share"]
+__all__ = ["SQ3", "next_joint", "chain_walk", "chain_reduce", "chain_back_substitute", "chain_share",
+           "walk", "reduce", "back_substitute", "share"]
 
 
 @njit(cache=True)
@@ -272,3 +273,23 @@ def chain_share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh):
         rod_share(t, q, qd, p, g, tension_only, elastic, ax, ay, az, avx, avy, avz, sh)
         ax, ay, az, avx, avy, avz = next_joint(q, qd, g, ax, ay, az, avx, avy, avz)
 
+
+# -- the tether part interface (tether/registry.py; the dispatcher tether/parts.py calls these) ----
+@njit(cache=True, inline="always")
+def walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz):
+    return chain_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz)
+
+
+@njit(cache=True, inline="always")
+def reduce(t, p, k):
+    return chain_reduce(t, p, k)
+
+
+@njit(cache=True, inline="always")
+def back_substitute(t, p, k, aax, aay, aaz, acc):
+    return chain_back_substitute(t, p, k, aax, aay, aaz, acc)
+
+
+@njit(cache=True, inline="always")
+def share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh):
+    chain_share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh)

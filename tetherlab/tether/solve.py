@@ -79,7 +79,7 @@ from ..kernel.layout import (
     TT_SIZE,
     WS_SIZE,
 )
-from .chain import chain_back_substitute, chain_reduce, chain_walk
+from .parts import tether_back_substitute, tether_reduce, tether_walk
 from .rod import fail, next_joint
 
 
@@ -114,7 +114,7 @@ def forward(t, q, qd, att, p, with_forces):
         p[ts + TS_A + 3] = avx
         p[ts + TS_A + 4] = avy
         p[ts + TS_A + 5] = avz
-        code, ax, ay, az, avx, avy, avz = chain_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz)
+        code, ax, ay, az, avx, avy, avz = tether_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz)
         if code != 0:
             return code
         p[ts + TS_B] = ax
@@ -162,7 +162,7 @@ def system_accelerations(t, q, qd, att, p, acc, datt):
             det = body_compliance(p, c, work)
             if det == 0.0 or not math.isfinite(det):
                 return fail(p, FAIL_SINGULAR, g0 + int(p[tb + TT_NRODS]) - 1, t, 0.0)
-        code = chain_reduce(t, p, k)
+        code = tether_reduce(t, p, k)
         if code != 0:
             return code
         j0 = jscr + (g0 + k) * SJ_SIZE
@@ -187,7 +187,7 @@ def system_accelerations(t, q, qd, att, p, acc, datt):
         k = int(p[order + i])
         tb = offt + k * TT_SIZE
         aax, aay, aaz = body_point_acceleration(p, int(p[tb + TT_PARENT]), tscr + k * TS_SIZE)
-        code = chain_back_substitute(t, p, k, aax, aay, aaz, acc)
+        code = tether_back_substitute(t, p, k, aax, aay, aaz, acc)
         if code != 0:
             return code
         c = int(p[tb + TT_CHILD])
