@@ -40,7 +40,7 @@ from tetherlab.forces import EFFECTS
 from tetherlab.formulations.cowell import cowell_rhs
 from tetherlab.model.params import ParamView
 from tetherlab.system import TetherSpec, build_model, center_of_mass, chain_state, point_positions, tolerance_scales
-from tetherlab.tether.chain import accelerations
+from tetherlab.tether.solve import accelerations
 
 SQ3 = math.sqrt(3.0)
 MU = 3.986004418e14  # m^3/s^2, Earth (the scenes' "earth" preset, WGS 84: tetherlab/scene.py)
@@ -156,9 +156,9 @@ def power_balance(model, y, mu):
     """
     p = model.fresh_params()
     nr = model.n_rods
-    h = y.size // 2
-    q, qd = y[:h].copy(), y[h:].copy()
-    acc = np.zeros(h)
+    lay = model.state
+    q, qd = y[lay.q].copy(), y[lay.qd].copy()
+    acc = np.zeros(lay.n_qt)
     assert accelerations(0.0, q, qd, p, acc) == 0
     view = ParamView(p)
     nodes = view.quadrature_nodes
@@ -179,7 +179,9 @@ def power_balance(model, y, mu):
     closed = 0.0
     scale = 0.0
     for i in range(nr):
-        d, dd, ddd = q[3 + 3 * i : 6 + 3 * i], qd[3 + 3 * i : 6 + 3 * i], acc[3 + 3 * i : 6 + 3 * i]
+        # q, q' and the accelerations each start at offset 0, as y does: rod(i) slices all three
+        sl = lay.rod(i)
+        d, dd, ddd = q[sl], qd[sl], acc[sl]
         m = masses[i]
         vG = v_pt + SQ3 * dd
         aG = a_pt + SQ3 * ddd
@@ -374,7 +376,7 @@ def discrete_hanging(kind, n, w_guess):
     def res(z):
         w = w_guess * (1.0 + 1e-3 * z[0])
         eps = 1e-3 * z[1:]
-        q = np.zeros(3 * (n + 1))
+        q = np.zeros(m.state.n_qt)
         qd = np.zeros_like(q)
         q[0] = R0
         qd[1] = w * R0
@@ -460,11 +462,10 @@ def libration_run(kind, shape, plane, amp=0.01, orbits=4.0):
     y0 = chain_state(m, r0, v0, [dirs], [0.0], np.array([0.0, 0.0, OMEGA]))
     ts = np.linspace(0.0, orbits * T_ORB, 4001)
     ts, Y = propagate(m, y0, ts, rtol=1e-11, atol=orbit_atol(m) * 10)
-    h = Y.shape[1] // 2
-    frame = D.orbital_frame(Y[:, :3], Y[:, h : h + 3])
+    frame = D.orbital_frame(Y[:, m.state.root_r], Y[:, m.state.root_v])
     angles = []
     for k in range(E_N):
-        d = Y[:, 3 + 3 * k : 6 + 3 * k]
+        d = Y[:, m.state.rod(k)]
         e = np.einsum("nij,nj->ni", frame, d / np.linalg.norm(d, axis=1)[:, None])
         angles.append(np.arctan2(e[:, 1], e[:, 0]) if plane == "in" else np.arcsin(e[:, 2]))
     return ts, np.array(angles)

@@ -20,7 +20,7 @@ from tetherlab.model.params import ParamView
 from tetherlab.orbits.ed_decay import decay_rate_m_s, decay_time_s, decay_time_with_inclination_s
 from tetherlab.scene import Scene, load_scene
 from tetherlab.system import TetherSpec, build_model, chain_state
-from tetherlab.tether.chain import rod_forces
+from tetherlab.tether.solve import rod_forces
 
 from .helpers import MU_EARTH, SCENES
 

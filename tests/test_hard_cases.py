@@ -156,7 +156,7 @@ def scene512():
     return load_scene(SCENES / "hard-n512.toml")
 
 
-def test_n512_scene_is_the_hard_case_definition(scene512):
+def test_n512_scene_is_a_damped_energy_model_tether(scene512):
     t = scene512.tethers[0]
     # "n = 512 rods stay stable over an orbit" (studies/hard_cases.py part 5); damped, energy model
     assert t.rods == 512 and t.damping_N_s == 2e4 and t.model == "energy"

@@ -124,7 +124,7 @@ def test_forest_solve_in_the_turning_frame_equals_dense_lu():
     prep = prepare(forest_scene())
     omega = np.array([0.01, -0.03, 0.04])
     pe = co.attach(prep.model.fresh_params(), omega)
-    y = co.to_frame(0.0, _state(prep), omega, prep.model.n_qt)
+    y = co.to_frame(0.0, _state(prep), omega, prep.model.state)
     assert nw.structure_supported(pe, y.size, True) == ""
     for rel in _solve_vs_dense(pe, y, omega=omega):
         assert rel <= 1e-11  # round-off, as above

@@ -241,7 +241,7 @@ def test_structured_solve_in_the_turning_frame_equals_dense_lu():
     prep = prepare(tetherlab.load_scene(SCENES / "deorbit-ed.toml").replace(**{"tethers.main.rods": 4}))
     omega = np.array([0.01, -0.03, 0.04])
     pe = co.attach(prep.model.fresh_params(), omega)
-    y = co.to_frame(0.0, prep.y0, omega, prep.model.n_qt)
+    y = co.to_frame(0.0, prep.y0, omega, prep.model.state)
     assert nw.structure_supported(pe, y.size, True) == ""
     _check_solve_equals_dense_lu(pe, y, 13, 1e-11, omega)
     # negative control: the same matrix without the frame terms is not what the solve inverts

@@ -10,6 +10,7 @@ import tetherlab
 from tetherlab.errors import SceneError
 from tetherlab.formulations import cowell_orbit as co
 from tetherlab.formulations.cowell import cowell_rhs_py
+from tetherlab.model.state import StateLayout
 from tetherlab.pipeline import integrate_prepared, prepare
 
 from .helpers import SCENES, call_cfunc
@@ -33,14 +34,15 @@ def test_frame_conversions_round_trip():
     rng = np.random.default_rng(3)
     omega = np.array([0.0, -5.7e-4, 8.2e-4])  # the de-orbit orbit's rate, rad/s
     nqt = 15
+    lay = StateLayout(rods=(4,))  # q of 15: the root and four rods
     y = rng.normal(size=2 * nqt) * np.r_[np.full(nqt, 7e6), np.full(nqt, 7e3)]
     for t in (0.0, 1234.5, 3.3e6):
-        back = co.to_inertial([t], co.to_frame(t, y, omega, nqt), omega, nqt)[0]
+        back = co.to_inertial([t], co.to_frame(t, y, omega, lay), omega, lay)[0]
         # round-off of two rotations of 7e6 m vectors: a few ulp of 7e6 m (1e-9 m each)
         np.testing.assert_allclose(back[:nqt], y[:nqt], rtol=0, atol=1e-7)
         np.testing.assert_allclose(back[nqt:], y[nqt:], rtol=0, atol=1e-10)
     # at t = 0 the frame coincides with the inertial one; rates differ by omega x q
-    f0 = co.to_frame(0.0, y, omega, nqt)
+    f0 = co.to_frame(0.0, y, omega, lay)
     np.testing.assert_array_equal(f0[:nqt], y[:nqt])
     np.testing.assert_allclose(f0[nqt : nqt + 3], y[nqt : nqt + 3] - np.cross(omega, y[:3]), rtol=1e-15, atol=1e-9)
 
@@ -50,11 +52,11 @@ def test_frame_rhs_is_the_inertial_rhs_in_turning_components():
     frame kinematics, the acceleration is the inertial Cowell one at the same physical state."""
     prep = prepare(_deorbit())
     nqt = prep.model.n_qt
-    omega = co.frame_rate(prep.y0, nqt)
+    omega = co.frame_rate(prep.y0, prep.model.state)
     pe = co.attach(prep.model.fresh_params(), omega)
     t = 2000.0
     y_in = prep.y0.copy()
-    y_f = co.to_frame(t, y_in, omega, nqt)
+    y_f = co.to_frame(t, y_in, omega, prep.model.state)
     st, dy = call_cfunc(co.cowell_orbit_rhs, t, y_f, pe)
     assert st == 0
     a_in = cowell_rhs_py(prep.model, y_in, t)[nqt:].reshape(-1, 3)
@@ -85,8 +87,9 @@ def test_turning_frame_agrees_with_the_inertial_run():
     # far smaller than a wrong Coriolis term) move the root by r w 1e-6 t = 3 cm: the bound fails
     (t_a, *omega), = b.stats["frame_anchors"]  # one frame: the run is shorter than its re-anchoring
     omega = np.asarray(omega)
-    yf = co.to_frame(b.t[-1] - t_a, yb, omega, h)
-    wrong = co.to_inertial([b.t[-1] - t_a], yf, omega * (1 + 1e-6), h)[0]
+    lay = StateLayout(rods=(h // 3 - 1,))  # one tether: q = (r0, its rods)
+    yf = co.to_frame(b.t[-1] - t_a, yb, omega, lay)
+    wrong = co.to_inertial([b.t[-1] - t_a], yf, omega * (1 + 1e-6), lay)[0]
     assert np.max(np.abs(ya[:3] - wrong[:3])) > 1e-2
 
 

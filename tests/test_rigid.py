@@ -33,7 +33,7 @@ from tetherlab.model import params as L
 from tetherlab.model.params import ParamView
 from tetherlab.pipeline import prepare, simulate
 from tetherlab.scene import Scene
-from tetherlab.tether.chain import system_accelerations
+from tetherlab.tether.solve import system_accelerations
 
 EPS = np.finfo(float).eps
 SQ3 = math.sqrt(3.0)

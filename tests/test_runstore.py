@@ -349,15 +349,104 @@ def test_a_terminal_stop_row_is_written_like_simulate_writes_it(tmp_path):
     _same(dg, ref.diagnostics)
 
 
-def test_a_dromo_run_is_written_when_it_ends_and_is_not_resumable(tmp_path):
+def test_a_dromo_sigma_radau5_run_is_written_when_it_ends_and_is_not_resumable(tmp_path):
+    # the sigma form with RADAU5 finds its outputs by a sigma grid and Newton searches in Python,
+    # with no loop state to checkpoint: written at its end, refused by --resume
     from tetherlab.scene import Scene
 
-    scene = Scene.from_dict({**KEPLER, "integrator": {**KEPLER["integrator"], "formulation": "dromo"}})
+    integ = {**KEPLER["integrator"], "formulation": "dromo", "method": "radau5"}
+    scene = Scene.from_dict({**KEPLER, "integrator": integ})
     rec = run_to_dir(scene, tmp_path / "o", progress=False, part_rows=16)
     assert rec["ok"] and not rec["resumable"] and not (tmp_path / "o" / "states.npy").exists()
+    assert rec["stats"]["formulation"] == "dromo-sigma"
     _same(_tables(tmp_path / "o")[0], simulate(scene, progress=False).timeseries)
     with pytest.raises(RunDirError, match="nothing to resume"):
         resume_dir(tmp_path / "o")
+
+
+def _sigma_scene(method):
+    # the sigma form on a J2-perturbed 7000 km orbit, 3 revolutions, 120 outputs: tens of accepted
+    # steps (ABM: 64 a revolution) and thousands of right-hand sides (the landing steps)
+    from tetherlab.scene import Scene
+
+    return Scene.from_dict({
+        **KEPLER, "duration": "17500 s", "effects": {"central_gravity": {}, "j2": {}},
+        "integrator": {**KEPLER["integrator"], "formulation": "dromo", "method": method},
+        "output": {"count": 120},
+    })  # fmt: skip
+
+
+def _interrupted_sigma_run(tmp_path, monkeypatch, method):
+    """(uninterrupted run dir, its record, a run dir interrupted on the clock loop's 5th call),
+    with the loop called every 2 accepted steps."""
+    from tetherlab.propagation import dromo as drive
+
+    monkeypatch.setattr(drive, "CLOCK_CHUNK_STEPS", 2)
+    scene = _sigma_scene(method)
+    ref = tmp_path / "ref"
+    rec_ref = run_to_dir(scene, ref, progress=False, part_rows=PART_ROWS)
+    assert rec_ref["ok"] and rec_ref["resumable"] and rec_ref["stats"]["formulation"] == "dromo-sigma"
+    assert rec_ref["stats"]["n_accepted"] > 5 * 2, rec_ref["stats"]  # several chunk boundaries
+    mem = simulate(scene, progress=False)
+    _same(_tables(ref)[0], mem.timeseries)
+    _same(_tables(ref)[1], mem.diagnostics)
+    name = "_abm_clock_run" if method == "abm" else "_clock_run"
+    real = getattr(drive, name)
+    calls = [0]
+
+    def call(*args):
+        calls[0] += 1
+        if calls[0] == 5:
+            signal.raise_signal(signal.SIGINT)
+        return real(*args)
+
+    monkeypatch.setattr(drive, name, call)
+    out = tmp_path / "o"
+    with pytest.raises(Interrupted) as info:
+        run_to_dir(scene, out, progress=False, checkpoint_s=1e9, part_rows=PART_ROWS)
+    monkeypatch.setattr(drive, name, real)
+    assert f"tetherlab run --resume {out}" in str(info.value)
+    return ref, rec_ref, out
+
+
+@pytest.mark.parametrize("method", ["dop853", "vern9", "abm"])
+def test_dromo_sigma_streams_and_resumes_bit_for_bit(tmp_path, monkeypatch, method):
+    """DROMO's sigma form keeps its own output clock (propagation/dromo.py): its compiled loop is
+    called in chunks of CLOCK_CHUNK_STEPS accepted steps, and the store streams the rows and
+    checkpoints the loop between calls.  Interrupted on its 5th call and resumed, the run ends
+    with the numbers of the uninterrupted run and of simulate(), bit for bit."""
+    ref, rec_ref, out = _interrupted_sigma_run(tmp_path, monkeypatch, method)
+    run = json.loads((out / "run.json").read_text())
+    assert run["state"] == "interrupted" and (out / CHECKPOINT).exists()
+    partial, _ = _tables(out)  # written as it went: the start of the reference, readable now
+    assert 0 < len(partial) == run["rows_done"] < 120
+    _same(partial, _tables(ref)[0].iloc[: len(partial)].reset_index(drop=True))
+    rec = resume_dir(out, progress=False)
+    assert rec["state"] == "complete" and rec["segments"] == 2
+    for a, b in zip(_tables(out), _tables(ref)):
+        _same(a, b)
+    assert np.array_equal(np.load(out / "states.npy"), np.load(ref / "states.npy"))
+    for k in ("n_accepted", "n_rejected", "sigma_end", "search_n_accepted", "time_residual_max_s"):
+        assert rec["stats"][k] == rec_ref["stats"][k], k
+
+
+def test_a_sigma_resume_that_loses_the_step_size_is_caught(tmp_path, monkeypatch):
+    # negative control of the comparison above: the same interrupted run, resumed from a
+    # checkpoint whose step size is dropped (the method picks its own first step again), does
+    # not end with the uninterrupted run's numbers
+    from tetherlab import runstore
+
+    ref, _, out = _interrupted_sigma_run(tmp_path, monkeypatch, "dop853")
+    real = runstore._sigma_restart
+
+    def lossy(z):
+        restart = real(z)
+        restart["sigma"]["h"] = 0.0
+        return restart
+
+    monkeypatch.setattr(runstore, "_sigma_restart", lossy)
+    assert resume_dir(out, progress=False)["state"] == "complete"
+    assert not np.array_equal(np.load(out / "states.npy"), np.load(ref / "states.npy"))
 
 
 def test_resume_refuses_what_it_cannot_continue(tmp_path):

@@ -49,7 +49,7 @@ from .kernel.layout import (
     WS_TAU,
 )
 from .kernel.shares import SH_E, SH_KE, SH_SIZE, SH_VE, SH_VG
-from .tether.chain import chain_share
+from .tether.parts import tether_share
 from .tether.solve import system_accelerations
 
 # columns of the global diagnostics array: the parts' share vector (kernel/shares.py)
@@ -68,7 +68,7 @@ def row_shares(t, q, qd, att, p, sh, elastic):
         body_share(t, att, p, b, sh)
     for k in range(int(p[H_NTETH])):
         ts_ = tscr + k * TS_SIZE
-        chain_share(
+        tether_share(
             t, q, qd, p, k, elastic,
             p[ts_ + TS_A], p[ts_ + TS_A + 1], p[ts_ + TS_A + 2], p[ts_ + TS_A + 3], p[ts_ + TS_A + 4], p[ts_ + TS_A + 5],
             sh,
@@ -89,7 +89,7 @@ def part_shares(t, q, qd, att, p, out, elastic):
         body_share(t, att, p, b, out[b])
     for k in range(int(p[H_NTETH])):
         ts_ = tscr + k * TS_SIZE
-        chain_share(
+        tether_share(
             t, q, qd, p, k, elastic,
             p[ts_ + TS_A], p[ts_ + TS_A + 1], p[ts_ + TS_A + 2], p[ts_ + TS_A + 3], p[ts_ + TS_A + 4], p[ts_ + TS_A + 5],
             out[nbody + k],
@@ -169,9 +169,9 @@ def compute(model, ts: np.ndarray, Y: np.ndarray) -> dict:
     joints = np.full((nrows, nj, 3), np.nan)
     ctrl = np.full((nrows, nb, 3), np.nan)
     wheels = np.full((nrows, nw, 2), np.nan)
-    nqt = model.n_qt
-    acc = np.zeros(nqt)
-    datt = np.zeros(Y.shape[1] - 2 * nqt)
+    lay = model.state
+    acc = np.zeros(lay.n_qt)
+    datt = np.zeros(lay.n_attitude + lay.n_wheels)
     if nrows:
         evaluate_rows(
             np.ascontiguousarray(ts, float), np.ascontiguousarray(Y, float), p, glob, rods, joints, acc, datt,
@@ -185,11 +185,11 @@ def shares(model, t: float, y: np.ndarray) -> np.ndarray:
     global diagnostics, G_E left 0), one per body in kernel order then one per tether.  Their sum
     is the diagnostics' global row."""
     p = model.fresh_params()
-    nqt = model.n_qt
+    lay = model.state
     y = np.ascontiguousarray(y, float)
-    acc = np.zeros(nqt)
-    datt = np.zeros(y.size - 2 * nqt)
-    q, qd, att = y[:nqt], y[nqt : 2 * nqt], y[2 * nqt :]
+    acc = np.zeros(lay.n_qt)
+    datt = np.zeros(lay.n_attitude + lay.n_wheels)
+    q, qd, att = y[lay.q], y[lay.qd], y[lay.first_order]
     code = system_accelerations(float(t), q, qd, att, p, acc, datt)
     if code != 0:
         raise ValueError(f"y: the right-hand side failed at this state (failure code {code})")

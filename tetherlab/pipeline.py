@@ -401,18 +401,17 @@ def segment_plan(prep: Prepared, p: np.ndarray) -> SegmentPlan:
     if prep.formulation == "cowell-orbit":
         from .formulations import cowell_orbit as co
 
-        nqt = lay.n_qt
         quats = [lay.quaternion_of(b).start for b, _ in lay.rigid]
-        pe = co.attach(p, co.frame_rate(prep.y0, nqt), 0.0)
+        pe = co.attach(p, co.frame_rate(prep.y0, lay), 0.0)
 
         def enter(t_a, y):
-            omega = co.frame_rate(y, nqt)
+            omega = co.frame_rate(y, lay)
             co.set_frame(pe, omega, t_a)
-            return co.to_frame(0.0, y, omega, nqt, quats), (t_a, omega)
+            return co.to_frame(0.0, y, omega, lay, quats), (t_a, omega)
 
         def leave(ctx, t, Z):
             t_a, omega = ctx
-            return co.to_inertial(np.asarray(t) - t_a, Z, omega, nqt, quats) if len(t) else Z
+            return co.to_inertial(np.asarray(t) - t_a, Z, omega, lay, quats) if len(t) else Z
 
         seg = ANCHOR_ORBITS * prep.ref_period_s if math.isfinite(prep.ref_period_s) else math.inf
         return SegmentPlan(pe, co.cowell_orbit_rhs, events, prep.atol, _second_order(prep.model), seg, enter,
@@ -518,9 +517,10 @@ def run_segments(prep: Prepared, plan: SegmentPlan, progress=None, store=None):
                                events=tuple(events))  # fmt: skip
 
 
-def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
+def _integrate_dromo(prep: Prepared, p: np.ndarray, progress, store=None):
     """The sigma form of DROMO (a point mass): its own driver schedules the outputs in physical
-    time (propagation/dromo.py); rows [r, v] are Cowell states of the single body."""
+    time (propagation/dromo.py); rows [r, v] are Cowell states of the single body.  ``store``
+    (tetherlab/runstore.py): rows streamed and the loop checkpointed between its compiled calls."""
     from .formulations import dromo
     from .model.params import FORM_DROMO_SIGMA
     from .propagation import dromo as drive
@@ -533,7 +533,7 @@ def _integrate_dromo(prep: Prepared, p: np.ndarray, progress):
     res = drive.integrate_sigma(
         prep.method, pe, r0, v0, prep.t_out, prep.rtol,
         prep.atol[0] / prep.ref_radius_m, prep.mu_m3_s2, length_m, max_steps=prep.max_steps,
-        progress=progress,
+        progress=progress, store=store,
     )  # fmt: skip
     return res, pe
 

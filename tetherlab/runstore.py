@@ -46,9 +46,18 @@ final: per chunk for Cowell, per segment otherwise).  The checkpoint adds the lo
 (segment index, its start time and Cowell start state, the rows before it, the step budget, the
 summed statistics, the events, the frame anchors): a resumed run re-enters the same segment with
 the same anchor and continues the driver from its checkpoint, so it is identical across segments
-too.  A run with a native method (dop853, vern9, radau5) is checkpointed; DROMO's sigma form (its
-own output clock, propagation/dromo.py) and scipy runs write the same files when they end, and
-cannot be resumed.
+too.  A run with a native method (dop853, vern9, radau5) is checkpointed.
+
+DROMO's sigma form (a point mass) integrates in sigma, not in time, and finds its output times with
+its own clock loop (propagation/dromo.py): with DOP853, Vern9 or ABM that loop is compiled and
+called in chunks of a constant number of accepted steps (CLOCK_CHUNK_STEPS).  After each call it
+hands the store the output rows it completed (Cowell rows [r, v], straight into ``states.npy``,
+full parts written) and its state (sigma, the 8-element state, the step size, the next output, the
+step budget, the sigma bound, the step statistics, the whole parameter block, ABM's history); the
+checkpoint holds that state (keys ``sigma_*``).  A resumed run restarts the loop from it, which is
+what the uninterrupted run does at the same step count: the same rows, bit for bit.  The sigma
+form with RADAU5 (a sigma grid and a Newton search per output) and scipy runs write the same files
+when they end, and cannot be resumed.
 """
 
 from __future__ import annotations
@@ -86,9 +95,9 @@ class Interrupted(Exception):
             text = (f"interrupted at t = {t:.9g} s of {t_end:.9g} s; {rows} output rows saved in {out_dir}/. "
                     f"Continue with: tetherlab run --resume {out_dir}")  # fmt: skip
         else:
-            text = (f"interrupted; this run (DROMO's sigma form or a scipy method) keeps no checkpoints, "
-                    f"nothing was saved in {out_dir}/: run it again (runs with dop853, vern9 or radau5 "
-                    f"in the other formulations can be resumed)")  # fmt: skip
+            text = (f"interrupted; this run (a scipy method, or DROMO's sigma form with radau5) keeps no "
+                    f"checkpoints, nothing was saved in {out_dir}/: run it again (runs with dop853, vern9 or "
+                    f"radau5, and the sigma form with dop853, vern9 or abm, can be resumed)")  # fmt: skip
         super().__init__(text)
 
 
@@ -212,7 +221,11 @@ class _Store:
 def _streamable(prep) -> bool:
     from .integrators.driver import NATIVE_METHODS
 
-    return prep.formulation != "dromo-sigma" and prep.method in NATIVE_METHODS
+    if prep.formulation == "dromo-sigma":
+        from .propagation.dromo import CLOCK_METHODS
+
+        return prep.method in CLOCK_METHODS
+    return prep.method in NATIVE_METHODS
 
 
 def _part_rows_for(scene, m: int) -> int:
@@ -305,8 +318,8 @@ def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
     if state in ("complete", "failed"):
         raise RunDirError(f"{str(out)!r}: nothing to resume, the run is {state} ({record.get('message', '')})")
     if not record.get("resumable"):
-        raise RunDirError(f"{str(out)!r}: this run cannot be resumed (DROMO's sigma form and scipy methods "
-                          f"keep no checkpoints); start it again with --out")  # fmt: skip
+        raise RunDirError(f"{str(out)!r}: this run cannot be resumed (scipy methods, and DROMO's sigma form "
+                          f"with RADAU5, keep no checkpoints); start it again with --out")  # fmt: skip
     if record.get("code_digest") != _code_digest():
         raise RunDirError(
             f"{str(out)!r} was started by other tetherlab sources (digest {record.get('code_digest')}, these are "
@@ -325,7 +338,7 @@ def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
     ck = out / CHECKPOINT
     if ck.exists() and (out / STATES).exists():
         with np.load(ck, allow_pickle=False) as z:
-            restart = {
+            restart = _sigma_restart(z) if "sigma_k" in z.files else {
                 # the kernel's whole block (the model's, with the formulation's block appended)
                 "p_full": z["p"].copy(),
                 "t": float(z["t"]), "h": float(z["h"]), "done": int(z["done"]), "budget": int(z["budget"]),
@@ -445,6 +458,8 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
 
     prep = store.prep
     out = store.out
+    if prep.formulation == "dromo-sigma":
+        return _run_sigma_streamed(store, record, states, p, restart, progress, checkpoint_s)
     plan = segment_plan(prep, p)
     if restart is not None:
         if restart["p_full"].shape != plan.pe.shape:
@@ -517,8 +532,101 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
         return _finish(store, record, res, p, states, wall_before + time.perf_counter() - t_wall, chunks_before)
 
 
+def _sigma_restart(z) -> dict:
+    """The sigma form's loop state from a checkpoint (propagation/dromo.py CLOCK_STATE_*)."""
+    from .propagation.dromo import CLOCK_STATE_ARRAYS, CLOCK_STATE_SCALARS
+
+    loop = {name: z["sigma_" + name].copy() for name in CLOCK_STATE_ARRAYS}
+    loop.update({name: z["sigma_" + name].item() for name in CLOCK_STATE_SCALARS})
+    return {"sigma": loop, "done": int(z["done"]), "wall_s": float(z["wall_s"]), "n_chunks": int(z["n_chunks"])}
+
+
+class _SigmaStore:
+    """The streamed run's side of DROMO's sigma-form clock loop (the ``store`` of
+    propagation/dromo.py integrate_sigma): rows into states.npy, full parts, checkpoints."""
+
+    def __init__(self, states, restart, on_chunk):
+        self.states = states
+        self.resume = restart["sigma"] if restart else None
+        self.on_chunk = on_chunk
+
+    def rows(self, j0, t, Y) -> None:
+        self.states[j0 : j0 + len(Y)] = Y
+
+    def chunk(self, state) -> None:
+        self.on_chunk(state)
+
+    def table(self, k):
+        return self.states[:k]
+
+
+def _run_sigma_streamed(store: _Store, record: dict, states, p, restart, progress, checkpoint_s):
+    """DROMO's sigma form (a point mass, its own output clock in sigma): the clock loop hands its
+    rows and its state to the store after every compiled call; rows go to states.npy and full
+    Parquet parts, the state to checkpoint.npz (every ``checkpoint_s`` of wall time, and on a
+    signal); a resumed run restarts the loop from that state."""
+    from .pipeline import _integrate_dromo, _ProgressBar
+    from .propagation.dromo import CLOCK_STATE_ARRAYS, CLOCK_STATE_SCALARS
+
+    prep = store.prep
+    out = store.out
+    have = store.parts_present()
+    if restart is not None:
+        store.write_full_parts(states, restart["done"], restart["sigma"]["p"], have)  # any a kill left unwritten
+    chunks_before = restart["n_chunks"] if restart else 0
+    record["segments"] = int(record.get("segments", 0)) + 1
+    record["state"] = "running"
+    _write_json(out / RUN_JSON, record)
+    bar = _ProgressBar(prep.t_out[-1], enabled=progress)
+    t_wall = time.perf_counter()
+    last_ck = [time.perf_counter()]
+
+    def save_checkpoint(state):
+        states.flush()
+        fd, tmp = tempfile.mkstemp(dir=out, prefix=".checkpoint-", suffix=".npz")
+        os.close(fd)
+        try:
+            arrays = {"sigma_" + name: np.asarray(state[name]) for name in CLOCK_STATE_ARRAYS}
+            scalars = {"sigma_" + name: np.asarray(state[name]) for name in CLOCK_STATE_SCALARS}
+            np.savez(tmp, done=state["k"], wall_s=state["wall_s"], n_chunks=chunks_before, **arrays, **scalars)
+            os.replace(tmp, out / CHECKPOINT)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+        last_ck[0] = time.perf_counter()
+
+    with _Signals() as sig:
+
+        def on_chunk(state):
+            done = int(state["k"])
+            store.write_full_parts(states, done, state["p"], have)
+            if state["ended"]:  # the run is over: it finishes, whatever the signal
+                return
+            if sig.hit is not None or time.perf_counter() - last_ck[0] >= checkpoint_s:
+                save_checkpoint(state)
+            if sig.hit is not None:
+                k = done // store.part_rows
+                a = k * store.part_rows
+                if done > a:  # the rows of the unfinished part, readable now, rebuilt on resume
+                    store.write_part(k, prep.t_out[a:done], states[a:done], state["p"], None if a == 0 else states[0])
+                record["state"] = "interrupted"
+                record["message"] = f"interrupted (signal {sig.hit}) at t = {state['t']:.9g} s"
+                record["t_s"] = state["t"]
+                record["rows_done"] = done
+                _write_json(out / RUN_JSON, record)
+                raise Interrupted(out, state["t"], float(prep.t_out[-1]), done)
+
+        try:
+            res, pe = _integrate_dromo(prep, p, bar.update, store=_SigmaStore(states, restart, on_chunk))
+        finally:
+            bar.close()
+        return _finish(store, record, res, pe, states, float(res.stats["wall_s"]), chunks_before)
+
+
 def _run_in_memory(store: _Store, record: dict, progress):
-    """DROMO's sigma form and scipy runs: integrated in memory, written when they end (no checkpoints)."""
+    """scipy runs and DROMO's sigma form with RADAU5: integrated in memory, written when they end
+    (no checkpoints)."""
     from .pipeline import _ProgressBar, integrate_prepared
 
     prep = store.prep
@@ -529,7 +637,8 @@ def _run_in_memory(store: _Store, record: dict, progress):
         res, p = integrate_prepared(prep, p, bar.update)
     except KeyboardInterrupt:
         record["state"] = "interrupted"
-        record["message"] = ("interrupted; this run keeps no checkpoints (DROMO's sigma form or a scipy method): "
+        record["message"] = ("interrupted; this run keeps no checkpoints (a scipy method, or DROMO's sigma form with "
+                             "radau5): "
                              "nothing was saved")
         _write_json(store.out / RUN_JSON, record)
         raise Interrupted(store.out, math.nan, float(prep.t_out[-1]), 0, resumable=False) from None

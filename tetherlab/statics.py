@@ -2,7 +2,7 @@
 
 Paper section 4.2: "cancel the derivatives of the model, and compute the value R_f of the external
 force on the ending mass m_f so that its position is the one required by the user."  Here that is
-done on the compiled model itself (:func:`tetherlab.tether.chain.accelerations`), not on a second
+done on the compiled model itself (:func:`tetherlab.tether.solve.accelerations`), not on a second
 copy of the physics:
 
     unknowns   d_1 ... d_n (3n) and R_f (3), velocities all zero;
@@ -27,7 +27,7 @@ import numpy as np
 from .forces import applied_force
 from .model.params import MUT_HOLD_1PC, ParamView
 from .system import Model, TetherSpec, build_model
-from .tether.chain import accelerations
+from .tether.solve import accelerations
 
 SQ3 = math.sqrt(3.0)
 

@@ -13,9 +13,12 @@ from typing import Any
 
 import numpy as np
 
+from .bodies.registry import part_of
+from .tether.registry import part_of as tether_part_of
 from .forces.registry import EffectSpec
 from .model import params as P
 from .model import topology
+from .model.state import StateLayout
 
 SQ3 = np.sqrt(3.0)
 
@@ -44,6 +47,7 @@ class TetherSpec:
     from_point_m: tuple = (0.0, 0.0, 0.0)  # attachment of A_1 on the parent, body axes (rigid)
     to_point_m: tuple = (0.0, 0.0, 0.0)  # attachment of B_n on the child, body axes (rigid)
     reversed: bool = False  # the scene writes it child -> parent: outputs flip it back
+    part: str = ""  # its part type (tether/registry.py); "": the rod chain
 
 
 @dataclass(frozen=True)
@@ -85,6 +89,7 @@ class BodySpec:
     mass_kg: float
     fixed: bool = False
     rigid: RigidSpec | None = None
+    part: str = ""  # its part type (bodies/registry.py); "": rigid with a rigid table, else point
 
 
 @dataclass
@@ -114,7 +119,7 @@ class Model:
 
     @property
     def has_attitude(self) -> bool:
-        return self.n_state > 2 * self.n_qt
+        return self.state.has_attitude
 
     def root_offset(self, b: int) -> int:
         """Index in q_trans of root body b's position."""
@@ -203,10 +208,10 @@ def build_model(
     if nbody < 1 + nteth:
         raise ValueError("bodies: expected 1 + one per tether (its child end) + the other roots")
     roots = [0] + list(range(1 + nteth, nbody))
-    nqt = 3 * (1 + nrods) + 3 * (nbody - 1 - nteth)
-    rigid = [b for b in range(nbody) if bodies[b].rigid is not None]
+    # the state's named blocks: the header's state offsets below are read from them
+    state = StateLayout.from_parts(tethers, bodies, roots)
+    rigid = [b for b, _ in state.rigid]
     wheels = [(b, w) for b in rigid for w in bodies[b].rigid.wheels]
-    n_state = 2 * nqt + 7 * len(rigid) + len(wheels)
 
     # What an effect with per-body or per-tether parameters needs to lay them out in kernel order:
     # body index 0 is the root, 1 + k the child end of tether k (the ``body`` argument of body_force).
@@ -233,7 +238,7 @@ def build_model(
     P.write_table_offsets(p, offs)
     v = P.ParamView(p)
     v.block_length = length
-    v.n_state = n_state
+    v.n_state = state.size
     v.formulation = P.FORM_COWELL
     v.n_rods = nrods
     v.n_tethers = nteth
@@ -243,10 +248,10 @@ def build_model(
     v.n_quadrature = quadrature
     v.fail_rod = -1
     v.min_strain = MIN_STRAIN
-    v.n_qtrans = nqt
-    v.attitude_index = 2 * nqt
+    v.n_qtrans = state.n_qt
+    v.attitude_index = state.attitude.start
     v.n_rigid = len(rigid)
-    v.wheel_state_index = 2 * nqt + 7 * len(rigid)
+    v.wheel_state_index = state.wheels.start
     v.n_wheels = len(wheels)
     v.n_bodies = nbody
     v.n_roots = len(roots)
@@ -288,6 +293,7 @@ def build_model(
         tv.parent = index[t.parent]
         tv.child = 1 + k if bodies[1 + k].name and bodies[1 + k].mass_kg > 0 else -1
         tv.parent_point_m = t.from_point_m
+        tv.part = tether_part_of(t).code  # the TT_PART slot the tether dispatcher reads
         rod_slices.append(slice(g, g + t.rods))
         for _ in range(t.rods):
             rv = v.rod(g)
@@ -312,28 +318,23 @@ def build_model(
     p[offs["order"] : offs["order"] + nteth] = order
     rigid_index = {}
     wheel_index = {}
-    att = 2 * nqt
-    whl = 2 * nqt + 7 * len(rigid)
     tab = v.part_offset("wheels", "tables")
-    extra = 3 * (1 + nrods)
     for b, body in enumerate(bodies):
         bv = v.body(b)
         fixed = body.fixed or not body.mass_kg > 0
         bv.mass_kg = 0.0 if fixed else body.mass_kg
         bv.inv_mass_1_kg = 0.0 if fixed else 1.0 / body.mass_kg
-        bv.qtrans_index = 0 if b == 0 else (extra + 3 * (b - 1 - nteth) if b > nteth else -1)
+        bv.qtrans_index = state.root_offset(b) if b == 0 or b > nteth else -1
         bv.parent = parent_tether.get(b, -1)
         bv.attitude_index = -1
         bv.n_children = sum(1 for t in tethers if t.parent == body.name and body.name)
         if 1 <= b <= nteth:
             bv.child_point_m = tethers[b - 1].to_point_m
+        bv.rigid = float(part_of(body).code)  # the BT_PART slot the part dispatcher reads
         if body.rigid is None:
             continue
         rs = body.rigid
-        bv.rigid = 1.0
-        bv.attitude_index = att
-        rigid_index[b] = att
-        att += 7
+        bv.attitude_index = rigid_index[b] = state.attitude_of(b).start
         JB = np.asarray(rs.inertia_kg_m2, float)
         JS = JB.copy()
         bv.wheel0 = len(wheel_index)
@@ -342,7 +343,7 @@ def build_model(
         pinv = np.linalg.pinv(np.array([w.axis for w in ctrl], float).T) if ctrl else None
         for w in rs.wheels:
             j = len(wheel_index)
-            wheel_index[(b, w.name)] = whl + j
+            wheel_index[(b, w.name)] = state.wheels.start + j
             a = np.asarray(w.axis, float)
             JS -= w.inertia_kg_m2 * np.outer(a, a)
             wv = v.wheel(j)
@@ -387,10 +388,7 @@ def build_model(
         rigid_index=rigid_index,
         wheel_index=wheel_index,
     )
-    # the state's named blocks, from the same bodies, tethers and roots as the offsets packed above
-    from .model.state import StateLayout
-
-    model.state = StateLayout.from_model(model)
+    model.state = state
     return model
 
 
@@ -416,11 +414,10 @@ def chain_state(
     start at the origin at rest; the attitude block (if any) at the identity, at rest, and the
     wheels at their initial speeds (:func:`attitude_block`).
     """
-    nqt = model.n_qt
-    q = np.zeros(nqt)
-    qd = np.zeros_like(q)
-    q[:3] = r0
-    qd[:3] = v0
+    lay = model.state
+    y = np.zeros(lay.size)
+    y[lay.root_r] = r0
+    y[lay.root_v] = v0
     lengths = model.rod_lengths()
     w = np.zeros(3) if omega is None else np.asarray(omega, float)
     for k, _ in enumerate(model.tethers):
@@ -429,9 +426,10 @@ def chain_state(
         for j, g in enumerate(range(sl.start, sl.stop)):
             u = dirs[j] / np.linalg.norm(dirs[j])
             d = u * lengths[g] * (1.0 + strains[k]) / (2.0 * SQ3)  # eq. 3
-            q[3 + 3 * g : 6 + 3 * g] = d
-            qd[3 + 3 * g : 6 + 3 * g] = np.cross(w, d)
-    return np.concatenate([q, qd, attitude_block(model, {})])
+            y[lay.rod(g)] = d
+            y[lay.rod_rate(g)] = np.cross(w, d)
+    y[lay.first_order] = attitude_block(model, {})
+    return y
 
 
 def attitude_block(model: Model, states: dict) -> np.ndarray:
@@ -450,15 +448,15 @@ def attitude_block(model: Model, states: dict) -> np.ndarray:
 
 
 def _state_parts(model: Model, y: np.ndarray):
-    nqt = model.n_qt
+    lay = model.state
     y = np.ascontiguousarray(y, float)
-    return y[:nqt], y[nqt : 2 * nqt], y[2 * nqt :]
+    return y[lay.q], y[lay.qd], y[lay.first_order]
 
 
 def point_positions(model: Model, y: np.ndarray) -> dict:
     """Inertial positions/velocities of the bodies, rod centres, joints and tips for one state
     (eq. 23), from the compiled kinematics of the forest (tether/chain.py: forward)."""
-    from .tether.chain import joint_states
+    from .tether.solve import joint_states
 
     nr = model.n_rods
     q, qd, att = _state_parts(model, y)
@@ -468,8 +466,9 @@ def point_positions(model: Model, y: np.ndarray) -> dict:
     bodies = np.zeros((len(model.bodies), 6))
     rot = np.zeros((len(model.bodies), 9))
     joint_states(q, qd, att, p, out, bodies, rot)
-    d = q[3 : 3 + 3 * nr].reshape(nr, 3)
-    dd = qd[3 : 3 + 3 * nr].reshape(nr, 3)
+    # q and q' start where y and its q' half start, so the rods' block slices them both
+    d = q[model.state.rods_d].reshape(nr, 3)
+    dd = qd[model.state.rods_d].reshape(nr, 3)
     rG = np.zeros((nr, 3))
     vG = np.zeros((nr, 3))
     joints = []  # per tether: (n_k + 1, 3) positions of A_1, B_1, ..., B_n (kernel order)
@@ -513,16 +512,18 @@ def tolerance_scales(model: Model, ref_length_m: float, ref_time_s: float) -> np
     components: 1; body rates: 1/time unit; wheel momenta: I_k times the larger of 1/time unit and
     the wheel's speed limit or initial speed.
     """
-    nr = model.n_rods
+    lay = model.state
     lengths = model.rod_lengths()
-    s_q = np.full(model.n_qt, float(ref_length_m))
-    for g in range(nr):
-        s_q[3 + 3 * g : 6 + 3 * g] = lengths[g] / (2 * SQ3)
-    s_v = s_q / ref_time_s
+    s = np.empty(lay.size)
+    s[lay.q] = float(ref_length_m)
+    for g in range(lay.n_rods):
+        s[lay.rod(g)] = lengths[g] / (2 * SQ3)
+    s[lay.qd] = s[lay.q] / ref_time_s
     att = []
     wheels = []
     for b in sorted(model.rigid_index):
         att.extend([1.0] * 4 + [1.0 / ref_time_s] * 3)
         for w in model.bodies[b].rigid.wheels:
             wheels.append(w.inertia_kg_m2 * max(1.0 / ref_time_s, abs(w.speed_rad_s), w.max_speed_rad_s))
-    return np.concatenate([s_q, s_v, np.array(att + wheels, float)])
+    s[lay.first_order] = np.array(att + wheels, float)
+    return s

@@ -36,6 +36,7 @@ from ..kernel.layout import (
 )
 from ..kernel.shares import SH_HX, SH_HY, SH_HZ, SH_KE, SH_PX, SH_PY, SH_PZ, SH_VG
 from ..kernel.vec3 import inv3, mat_vec
+from .common import set_body_state
 
 
 @njit(cache=True)
@@ -168,3 +169,64 @@ def point_share(t, p, b, sh):
     sh[SH_HZ] += m * (rx * vy - ry * vx)
     sh[SH_KE] += 0.5 * m * (vx * vx + vy * vy + vz * vz)
     sh[SH_VG] += m * potential_per_mass(p, t, rx, ry, rz)
+
+
+# -- the part interface (bodies/registry.py; the dispatcher bodies/parts.py calls these) -----------
+@njit(cache=True, inline="always")
+def root_state(att, p, b):
+    """Nothing beyond the centre of mass the driver wrote: a point has no attitude."""
+
+
+@njit(cache=True, inline="always")
+def end_state(att, p, c, bx, by, bz, bvx, bvy, bvz):
+    """A point at the end B_n of its tether is at B_n."""
+    set_body_state(p, c, bx, by, bz, bvx, bvy, bvz)
+
+
+@njit(cache=True, inline="always")
+def attach(p, b, tb, ts, ax, ay, az, avx, avy, avz):
+    """A tether attached to a point starts at the point."""
+    return ax, ay, az, avx, avy, avz
+
+
+@njit(cache=True, inline="always")
+def setup(t, att, p, b, datt):
+    point_setup(t, p, b)
+
+
+@njit(cache=True, inline="always")
+def add_child(p, b, k, W, s0):
+    point_add_child(p, b, W, s0)
+
+
+@njit(cache=True, inline="always")
+def compliance(p, c, work):
+    return point_compliance(p, c)
+
+
+@njit(cache=True, inline="always")
+def root_solve(p, b):
+    return point_root_solve(p, b)
+
+
+@njit(cache=True, inline="always")
+def point_acceleration(p, b, ts):
+    """Every attachment on a point moves with it."""
+    A = int(p[H_OFF_BSCR]) + b * BS_SIZE + BS_A
+    return p[A], p[A + 1], p[A + 2]
+
+
+@njit(cache=True, inline="always")
+def back_substitute(p, c, jn):
+    point_back_substitute(p, c, jn)
+
+
+@njit(cache=True, inline="always")
+def derivatives(att, p, b, datt):
+    """No state of its own: nothing to differentiate."""
+    return True
+
+
+@njit(cache=True, inline="always")
+def share(t, att, p, b, sh):
+    point_share(t, p, b, sh)

@@ -63,9 +63,11 @@ from ..kernel.layout import (
     TS_KAP,
     TS_RHO,
     TS_SIZE,
+    TT_PA,
 )
 from ..kernel.shares import SH_HX, SH_HY, SH_HZ, SH_KE, SH_KROT, SH_VG
 from ..kernel.vec3 import cross, inv_n, mat_t_vec, mat_vec, mat_vec_n
+from .common import set_body_state
 from .control import pd_torque
 from .point import point_force, point_share
 from .rigid import gravity_gradient_potential, gravity_gradient_torque, quat_rate, rotation
@@ -355,3 +357,74 @@ def rigid_share(t, att, p, b, sh):
     if mu_gg > 0.0:
         rbx, rby, rbz = mat_t_vec(p, bs + BS_ROT, p[bs + BS_R], p[bs + BS_R + 1], p[bs + BS_R + 2])
         sh[SH_VG] += gravity_gradient_potential(p, bt + BT_JB, mu_gg, rbx, rby, rbz)
+
+
+# -- the part interface (bodies/registry.py; the dispatcher bodies/parts.py calls these) -----------
+@njit(cache=True, inline="always")
+def root_state(att, p, b):
+    """A root's attitude (its centre of mass is already in its scratch)."""
+    rigid_attitude(att, p, b)
+
+
+@njit(cache=True, inline="always")
+def end_state(att, p, c, bx, by, bz, bvx, bvy, bvz):
+    """Body c at the end B_n (position, velocity) of its parent tether: its centre of mass
+    r_G = r_B - R rho_b (and its velocity) and attitude into its scratch."""
+    rigid_attitude(att, p, c)
+    pt = int(p[H_OFF_BODY]) + c * BT_SIZE + BT_PT
+    rx, ry, rz, vx, vy, vz, kx, ky, kz = rigid_offset(p, c, p[pt], p[pt + 1], p[pt + 2])
+    set_body_state(p, c, bx - rx, by - ry, bz - rz, bvx - vx, bvy - vy, bvz - vz)
+
+
+@njit(cache=True, inline="always")
+def attach(p, b, tb, ts, ax, ay, az, avx, avy, avz):
+    """The attachment point A_1 of the tether (table tb, scratch ts): the centre of mass plus
+    rho = R rho_b (rho and kappa kept in ts for the back substitution)."""
+    rx, ry, rz, vx, vy, vz, kx, ky, kz = rigid_offset(p, b, p[tb + TT_PA], p[tb + TT_PA + 1], p[tb + TT_PA + 2])
+    p[ts + TS_RHO] = rx
+    p[ts + TS_RHO + 1] = ry
+    p[ts + TS_RHO + 2] = rz
+    p[ts + TS_KAP] = kx
+    p[ts + TS_KAP + 1] = ky
+    p[ts + TS_KAP + 2] = kz
+    return ax + rx, ay + ry, az + rz, avx + vx, avy + vy, avz + vz
+
+
+@njit(cache=True, inline="always")
+def setup(t, att, p, b, datt):
+    rigid_setup(t, att, p, b, datt)
+
+
+@njit(cache=True, inline="always")
+def add_child(p, b, k, W, s0):
+    rigid_add_child(p, b, k, W, s0)
+
+
+@njit(cache=True, inline="always")
+def compliance(p, c, work):
+    return rigid_compliance(p, c, work)
+
+
+@njit(cache=True, inline="always")
+def root_solve(p, b):
+    return rigid_root_solve(p, b)
+
+
+@njit(cache=True, inline="always")
+def point_acceleration(p, b, ts):
+    return rigid_point_acceleration(p, b, ts)
+
+
+@njit(cache=True, inline="always")
+def back_substitute(p, c, jn):
+    rigid_back_substitute(p, c, jn)
+
+
+@njit(cache=True, inline="always")
+def derivatives(att, p, b, datt):
+    return rigid_derivatives(att, p, b, datt)
+
+
+@njit(cache=True, inline="always")
+def share(t, att, p, b, sh):
+    rigid_share(t, att, p, b, sh)

@@ -14,7 +14,7 @@ from numba import carray
 
 from .._jit import rhs_cfunc
 from ..kernel.layout import H_LEN, H_NQT, H_NSTATE
-from ..tether.chain import system_accelerations
+from ..tether.solve import system_accelerations
 
 
 @rhs_cfunc

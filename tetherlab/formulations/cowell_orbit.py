@@ -56,7 +56,7 @@ from numba import carray
 
 from .._jit import njit, rhs_cfunc
 from ..kernel.layout import FORM_COWELL_ORBIT, H_FORM, H_LEN, H_NQT, H_NRIGID, H_NSTATE, H_OFF_ATT, H_OFF_FORM
-from ..tether.chain import system_accelerations
+from ..tether.solve import system_accelerations
 
 OP_W = 0
 OP_T0 = 3
@@ -211,42 +211,43 @@ def _turn_quaternions(t, Y, omega: np.ndarray, quaternions, sign: float) -> None
         Y[:, o + 3] = c * b[:, 3] + s * (k[2] * b[:, 0] + k[0] * b[:, 2] - k[1] * b[:, 1])
 
 
-def to_inertial(t, Y, omega_rad_s, n_qt: int, quaternions=()) -> np.ndarray:
+def to_inertial(t, Y, omega_rad_s, state, quaternions=()) -> np.ndarray:
     """Cowell states [q, q_in', attitude, wheels] (rows) from frame states [q, v, attitude_f,
-    wheels] at the times ``t`` since the anchor; ``quaternions``: the offsets of the rigid bodies'
-    quaternions (StateLayout.quaternion_of), stored body -> frame in the frame state."""
+    wheels] at the times ``t`` since the anchor; ``state``: the model's StateLayout;
+    ``quaternions``: the offsets of the rigid bodies' quaternions (StateLayout.quaternion_of),
+    stored body -> frame in the frame state."""
     omega = np.asarray(omega_rad_s, dtype=float)
     Y = np.atleast_2d(np.asarray(Y, dtype=float))
     R = _rotation_matrices(t, omega)
     m = Y.shape[0]
-    q = Y[:, :n_qt].reshape(m, -1, 3)
-    v = Y[:, n_qt : 2 * n_qt].reshape(m, -1, 3) + np.cross(omega, q)
+    q = Y[:, state.q].reshape(m, -1, 3)
+    v = Y[:, state.qd].reshape(m, -1, 3) + np.cross(omega, q)
     out = Y.copy()
-    out[:, :n_qt] = np.einsum("mij,mkj->mki", R, q).reshape(m, -1)
-    out[:, n_qt : 2 * n_qt] = np.einsum("mij,mkj->mki", R, v).reshape(m, -1)
+    out[:, state.q] = np.einsum("mij,mkj->mki", R, q).reshape(m, -1)
+    out[:, state.qd] = np.einsum("mij,mkj->mki", R, v).reshape(m, -1)
     _turn_quaternions(t, out, omega, quaternions, 1.0)
     return out
 
 
-def to_frame(t: float, y, omega_rad_s, n_qt: int, quaternions=()) -> np.ndarray:
+def to_frame(t: float, y, omega_rad_s, state, quaternions=()) -> np.ndarray:
     """The frame state of one Cowell state y at the time t since the anchor (:func:`to_inertial`)."""
     omega = np.asarray(omega_rad_s, dtype=float)
     y = np.asarray(y, dtype=float)
     R = _rotation_matrices(t, omega)[0]
-    q_in = y[:n_qt].reshape(-1, 3)
+    q_in = y[state.q].reshape(-1, 3)
     q = q_in @ R  # R^T q_in for every row
-    v = y[n_qt : 2 * n_qt].reshape(-1, 3) @ R - np.cross(omega, q)
+    v = y[state.qd].reshape(-1, 3) @ R - np.cross(omega, q)
     out = y.copy()
-    out[:n_qt] = q.ravel()
-    out[n_qt : 2 * n_qt] = v.ravel()
+    out[state.q] = q.ravel()
+    out[state.qd] = v.ravel()
     _turn_quaternions([t], out[None, :], omega, quaternions, -1.0)
     return out
 
 
-def frame_rate(y0: np.ndarray, n_qt: int) -> np.ndarray:
-    """omega of the frame: the root body's r x v / |r|^2 at the start."""
-    r = y0[:3]
-    v = y0[n_qt : n_qt + 3]
+def frame_rate(y0: np.ndarray, state) -> np.ndarray:
+    """omega of the frame: the root body's r x v / |r|^2 at the start (``state``: the StateLayout)."""
+    r = y0[state.root_r]
+    v = y0[state.root_v]
     rr = float(r @ r)
     if not rr > 0.0:
         raise ValueError("the root body is at the centre of the central body: no orbit to turn with")

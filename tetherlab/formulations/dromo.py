@@ -47,7 +47,7 @@ from ..kernel.layout import (
     MUT_TE_SECULAR,
 )
 from ..kernel.events import event_values
-from ..tether.chain import system_accelerations
+from ..tether.solve import system_accelerations
 
 # Formulation block (at p[H_OFF_FORM]): mu, L, T, Cowell state length, DROMO state length;
 # a scratch buffer (q, q', acc of the Cowell coordinates) starts at FP_BUF.

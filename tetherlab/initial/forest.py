@@ -142,7 +142,7 @@ def forest_state(scene, graph, model: Model, mu: float):
     order = graph.placement_order
 
     sides = [1.0] * len(tethers)
-    nqt = model.n_qt
+    lay = model.state
     att_states = {}
     pos_guess = {n: (r_ref, v_ref) for n in kindex}  # each body's (r, v) for its orbit frame
     y = None
@@ -195,13 +195,11 @@ def forest_state(scene, graph, model: Model, mu: float):
         # assemble y (positions), centre-of-mass reference shifted afterwards
         y = np.zeros(model.n_state)
         for ri, root in enumerate(roots):
-            qo = model.root_offset(kindex[root])
-            y[qo : qo + 3] = pos[root]
+            y[lay.root_position(kindex[root])] = pos[root]
         for k, vecs in dvec.items():
-            sl = model.rod_slices[k]
-            y[3 + 3 * sl.start : 3 + 3 * sl.stop] = (vecs / (2.0 * SQ3)).ravel()
+            y[lay.tether_rods(k)] = (vecs / (2.0 * SQ3)).ravel()
         states = {kindex[n]: (_quat_of(R[n]), tuple(W[n])) for n in R}
-        y[2 * nqt :] = attitude_block(model, states)
+        y[lay.first_order] = attitude_block(model, states)
         if anchors[0][0] == "center_of_mass":
             c, _ = center_of_mass(model, y)
             shift = r_ref - c
@@ -233,7 +231,6 @@ def forest_state(scene, graph, model: Model, mu: float):
             par, ch = parents[k], children[k]
             ri = comp_of[par]
             ex = extra[par]
-            sl = model.rod_slices[k]
             if t.initial is None:
                 spec = model.tethers[k]
                 rho_a = R[par] @ np.asarray(spec.from_point_m) if par in R else np.zeros(3)
@@ -254,11 +251,10 @@ def forest_state(scene, graph, model: Model, mu: float):
                 for om, cen in ex:
                     v = v + np.cross(om, pos[ch] - cen)
                 vel[ch] = v
-            y[nqt + 3 + 3 * sl.start : nqt + 3 + 3 * sl.stop] = dd.ravel()
+            y[lay.tether_rates(k)] = dd.ravel()
             extra[ch] = ex + ([(R[ch] @ W[ch] - w_frame, pos[ch])] if ch in R else [])
         for ri, root in enumerate(roots):
-            qo = model.root_offset(kindex[root])
-            y[nqt + qo : nqt + qo + 3] = vel[root]
+            y[lay.root_velocity(kindex[root])] = vel[root]
         # a rigid body's velocity is that of its centre of mass; children of rigid parents got it
         # through their attachment velocities above (the kernel derives non-root states anyway)
         pos_guess = {n: (pos[n], vel[n]) for n in pos}

@@ -58,8 +58,8 @@ FAIL_TEXT = {
 }
 
 # part kind of each body (bodies/parts.py dispatches every part function on it); the code lives in
-# the BT_RIGID slot, written once by build_model: PART_POINT = 0 (point mass), PART_RIGID = 1
-BT_PART = BT_RIGID; PART_POINT = 0; PART_RIGID = 1  # noqa: E702
+# the BT_RIGID slot, written once by build_model from the part table bodies/registry.py
+BT_PART = BT_RIGID
 
 # -- body controls ---------------------------------------------------------------------------------
 CTRL_NONE = 0

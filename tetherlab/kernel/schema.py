@@ -107,6 +107,7 @@ TETHER = Record("tether", "TT_", 12, (
     _i("parent", "TT_PARENT", "body index at end A_1 (the root side; kernel order, after any reversal)"),
     _i("child", "TT_CHILD", "body index at end B_n (-1: free end)"),
     _f("parent_point_m", "TT_PA", 3, "m", "attachment point of A_1 on the parent, body axes (zero on a point mass)"),
+    _i("part", "TT_PART", "its part kind (tether/registry.py; the dispatcher tether/parts.py reads it)"),
 ))
 
 BODY = Record("body", "BT_", 40, (

@@ -151,6 +151,15 @@ class StateLayout:
             return 0
         return 3 * (1 + self.n_rods) + 3 * self.other_roots.index(b)
 
+    def root_position(self, b: int) -> slice:
+        """Position of root body ``b`` (b = 0 or one of ``other_roots``)."""
+        o = self.root_offset(b)
+        return slice(o, o + 3)
+
+    def root_velocity(self, b: int) -> slice:
+        o = self.n_qt + self.root_offset(b)
+        return slice(o, o + 3)
+
     def attitude_of(self, b: int) -> slice:
         """Quaternion (4) and omega (3) of rigid body ``b`` (kernel index)."""
         j = [body for body, _ in self.rigid].index(b)
@@ -235,13 +244,19 @@ class StateLayout:
     @classmethod
     def from_model(cls, model) -> "StateLayout":
         """The layout of a built model (its tethers, roots, rigid bodies in kernel order)."""
-        rigid = tuple((b, len(model.bodies[b].rigid.wheels)) for b in sorted(model.rigid_index))
+        return cls.from_parts(model.tethers, model.bodies, model.roots)
+
+    @classmethod
+    def from_parts(cls, tethers, bodies, roots) -> "StateLayout":
+        """The layout of tethers and bodies in kernel order, ``roots`` the roots' body indices
+        (root 0 first): what build_model packs the block from."""
+        rigid = tuple((b, len(body.rigid.wheels)) for b, body in enumerate(bodies) if body.rigid is not None)
         return cls(
-            rods=tuple(t.rods for t in model.tethers),
-            other_roots=tuple(model.roots[1:]),
+            rods=tuple(t.rods for t in tethers),
+            other_roots=tuple(roots[1:]),
             rigid=rigid,
-            tether_names=tuple(t.name for t in model.tethers),
-            body_names=tuple(b.name for b in model.bodies),
+            tether_names=tuple(t.name for t in tethers),
+            body_names=tuple(b.name for b in bodies),
         )
 
     def agrees_with(self, p: np.ndarray) -> list[str]:

@@ -284,31 +284,69 @@ def integrate_time(method, p_ext, layout, y0_cowell, t_out, rtol, atol_cowell, m
                              events=res.events, stopped_by=res.stopped_by)  # fmt: skip
 
 
+#: Sigma-form methods whose run can be written as it goes and continued (the clock loop's).
+CLOCK_METHODS = (*ERK_KINDS, ABM_METHOD)
+
+
 def integrate_sigma(method, p_ext, r0_m, v0_m_s, t_out, rtol, atol, mu, length_m, sigma0=0.0,
-                    max_steps=10**7, progress=None, grid_per_rev=GRID_PER_REV):  # fmt: skip
+                    max_steps=10**7, progress=None, grid_per_rev=GRID_PER_REV, store=None):  # fmt: skip
     """Sigma form for a point mass, with the state reported at the physical times ``t_out`` (s).
 
     Returns an IntegrationResult with Cartesian rows [r, v] (m, m/s) at ``t_out``.  ``atol`` is in
     the units of the non-dimensional state (a scalar).  DOP853, Vern9 and "abm" find the output
     sigmas in their compiled loop (:func:`_integrate_sigma_clock`); the other methods use the sigma
     grid and a Newton search (:func:`_integrate_sigma_grid`).  See the module docstring.
+
+    ``store`` (clock methods only; tetherlab/runstore.py): a run written as it goes.  After every
+    call of the compiled loop, ``store.rows(j0, t, Y)`` receives the output rows j0.. it completed
+    and ``store.chunk(state)`` the loop's state (CLOCK_STATE_ARRAYS and CLOCK_STATE_SCALARS, plus
+    ``t`` and ``ended``), which it may checkpoint; a
+    store whose ``resume`` is such a state continues from it, bit for bit the run that was never
+    stopped (the loop restarts from the same numbers at the same step counts); the result's rows
+    are then ``store.table(k)``, the k rows it holds.
     """
     tt = np.asarray(t_out, float)
     if tt.ndim != 1 or tt.size == 0 or np.any(np.diff(tt) < 0) or tt[0] < 0:
         raise ValueError(f"t_out: expected non-decreasing times >= 0 s; got {tt!r}")
-    if method in ERK_KINDS or method == ABM_METHOD:
+    if method in CLOCK_METHODS:
         return _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m,
-                                      sigma0, max_steps, progress)  # fmt: skip
+                                      sigma0, max_steps, progress, store)  # fmt: skip
+    if store is not None:
+        raise ValueError(f"method: expected one of {CLOCK_METHODS} for a sigma-form run written as it goes, "
+                         f"got {method!r}")  # fmt: skip
     return _integrate_sigma_grid(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0,
                                  max_steps, progress, grid_per_rev)  # fmt: skip
 
 
-#: Accepted steps per call of the compiled clock loop: progress is reported between calls.
+#: Accepted steps per call of the compiled clock loop: progress is reported, rows streamed and
+#: checkpoints taken between calls.  The calls restart the method (forgetting the controller's
+#: last rejection), so the chunk size is a constant, never tuned to the machine's speed: a run
+#: continued from a checkpoint then meets the same restarts as one that never stopped.
 CLOCK_CHUNK_STEPS = 200_000
+
+#: What the clock loop carries from one call to the next (the ``state`` its store receives).
+CLOCK_STATE_ARRAYS = ("z", "stats", "p", "abm_F", "abm_S", "abm_K", "abm_w", "abm_fix")
+CLOCK_STATE_SCALARS = ("sig", "h", "k", "budget", "status", "sig_max", "head", "n_landings", "residual_max_s",
+                       "wall_s")
+
+
+def _cartesian_rows(out_sig, out_z, tt, j0, j1, mode, T, mu, length_m):
+    """Cowell rows [r, v] of the outputs j0..j1-1, and the largest time residual |t_k - t(sigma_k)|
+    among them: each output's residual g is stepped over with the Kepler acceleration,
+    r + v g + a g^2/2, v + a g."""
+    tau_out = _taus(out_sig[j0:j1], out_z[j0:j1], mode)
+    rows = []
+    for i, j in enumerate(range(j0, j1)):
+        r, v = dromo_to_cartesian(float(out_sig[j]), out_z[j, 1:8], mu, length_m)
+        g = float(tt[j] - tau_out[i] * T)
+        a = -mu * r / float(r @ r) ** 1.5
+        rows.append(np.concatenate([r + v * g + 0.5 * a * g * g, v + a * g]))
+    residual = float(np.max(np.abs(tt[j0:j1] - tau_out * T))) if j1 > j0 else 0.0
+    return np.array(rows).reshape(j1 - j0, 6), residual
 
 
 def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, length_m, sigma0,
-                           max_steps, progress):  # fmt: skip
+                           max_steps, progress, store=None):  # fmt: skip
     """DOP853 or Vern9 in sigma with the output times found inside the compiled loop
     (:func:`_clock_run`).
 
@@ -339,15 +377,30 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
     is_abm = method == ABM_METHOD
     compile_s = warm_up("vern9" if is_abm else method, dromo_sigma_rhs, 8, p_ext)
     kind = VERN9 if is_abm else ERK_KINDS[method]
-    if is_abm:
-        ws = _abm.workspace(8)
-        head = -1
-    t0 = time.perf_counter()
+    ws = _abm.workspace(8) if is_abm else None
+    head = -1
     sig, h, k, budget, status = float(sigma0), 0.0, 0, int(max_steps), OK_STATUS
     if is_abm:
         h = TWO_PI / ABM_FIRST_STEPS_PER_REV
+    n_landings, residual_max, wall_before = 0, 0.0, 0.0
+    rows = []  # without a store: the Cowell rows, kept in memory
+    back = store.resume if store is not None else None
+    if back is not None:  # continue the loop where a checkpoint left it (CLOCK_STATE_*)
+        if back["p"].shape != p_ext.shape:
+            raise ValueError(f"resume: a parameter block of {back['p'].size} floats, this run's has {p_ext.size}")
+        p_ext[:] = back["p"]
+        z[:] = back["z"]
+        stats[:] = back["stats"]
+        sig, h, k, budget = float(back["sig"]), float(back["h"]), int(back["k"]), int(back["budget"])
+        status, sig_max, head = int(back["status"]), float(back["sig_max"]), int(back["head"])
+        n_landings, residual_max, wall_before = int(back["n_landings"]), float(back["residual_max_s"]), float(back["wall_s"])
+        if is_abm:
+            for key in ("F", "S", "K", "w", "fix"):
+                ws[key][...] = back["abm_" + key]
+    t0 = time.perf_counter()
     while k < m:
         acc = int(stats[ST_ACCEPTED])
+        k_before = k
         if is_abm:
             status, sig, h, head, k = _abm_clock_run(dromo_sigma_rhs, dromo_clock_event, ABM_ORDER, sig, z, h,
                                                      ws["F"], ws["S"], head, targets, k, p_ext, float(rtol),
@@ -359,25 +412,35 @@ def _integrate_sigma_clock(method, p_ext, r0_m, v0_m_s, tt, rtol, atol, mu, leng
                                                     sig_max, min(CLOCK_CHUNK_STEPS, budget), out_sig,
                                                     out_z, stats)  # fmt: skip
         budget -= int(stats[ST_ACCEPTED]) - acc
+        # the outputs this call completed: their rows, the landing steps, the largest residual
+        Yk, res_k = _cartesian_rows(out_sig, out_z, tt, k_before, k, mode, T, mu, length_m)
+        n_landings += int(np.count_nonzero(out_sig[k_before:k] != sigma0))
+        residual_max = max(residual_max, res_k)
+        if store is None:
+            rows.append(Yk)
+        else:
+            store.rows(k_before, tt[k_before:k], Yk)
         if progress is not None:
             progress(float(physical_tau(sig, z, mode) * T))
-        if status != OK_STATUS and (status != MAX_STEPS_STATUS or budget <= 0):
+        ended = status != OK_STATUS and (status != MAX_STEPS_STATUS or budget <= 0)
+        if store is not None:
+            store.chunk(dict(
+                t=float(physical_tau(sig, z, mode) * T), ended=ended, sig=sig, h=h, k=k, budget=budget, status=int(status),
+                sig_max=sig_max, head=head, n_landings=n_landings, residual_max_s=residual_max,
+                wall_s=wall_before + time.perf_counter() - t0, z=z, stats=stats, p=p_ext,
+                **{"abm_" + key: (ws[key] if is_abm else np.zeros(0)) for key in ("F", "S", "K", "w", "fix")},
+            ))  # fmt: skip
+        if ended:
             break
-    wall = time.perf_counter() - t0
-    rows = []
-    tau_out = _taus(out_sig[:k], out_z[:k], mode)
-    for j in range(k):
-        r, v = dromo_to_cartesian(float(out_sig[j]), out_z[j, 1:8], mu, length_m)
-        g = float(tt[j] - tau_out[j] * T)
-        a = -mu * r / float(r @ r) ** 1.5
-        rows.append(np.concatenate([r + v * g + 0.5 * a * g * g, v + a * g]))
-    Y = np.array(rows).reshape(k, 6)
+    wall = wall_before + time.perf_counter() - t0
+    Y = np.concatenate(rows) if rows else np.zeros((0, 6))
+    if store is not None:
+        Y = store.table(k)
     st = {"n_accepted": int(stats[ST_ACCEPTED]), "n_rejected": int(stats[ST_REJECTED]),
           "n_rhs": int(stats[ST_NRHS]), "n_jac": int(stats[ST_NJAC]), "n_lu": int(stats[ST_NLU]),
           "wall_s": wall, "compile_s": compile_s, "sigma_end": float(sig),
           # the landing steps, one per output after the start (their rhs calls are in n_rhs)
-          "search_n_accepted": int(np.count_nonzero(out_sig[:k] != sigma0)),
-          "time_residual_max_s": float(np.max(np.abs(tt[:k] - tau_out * T))) if k else 0.0}  # fmt: skip
+          "search_n_accepted": n_landings, "time_residual_max_s": residual_max}  # fmt: skip
     if k == m:
         status, message = 0, f"reached t={tt[-1]!r} (sigma form, sigma={out_sig[-1]:.6f})"
     else:

@@ -72,7 +72,8 @@ from ..kernel.layout import (
 from ..kernel.vec3 import add_iuu, inv3, iuu_vec, mat_vec, sub_iuu_sandwich
 from .rod import SQ3, fail, next_joint, rod_force, rod_share
 
-__all__ = ["SQ3", "next_joint", "chain_walk", "chain_reduce", "chain_back_substitute", "chain_share"]
+__all__ = ["SQ3", "next_joint", "chain_walk", "chain_reduce", "chain_back_substitute", "chain_share",
+           "walk", "reduce", "back_substitute", "share"]
 
 
 @njit(cache=True)
@@ -273,14 +274,22 @@ def chain_share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh):
         ax, ay, az, avx, avy, avz = next_joint(q, qd, g, ax, ay, az, avx, avy, avz)
 
 
-_SOLVE_NAMES = ("system_accelerations", "accelerations", "forward", "rod_forces", "tip_position_velocity", "joint_states")
+# -- the tether part interface (tether/registry.py; the dispatcher tether/parts.py calls these) ----
+@njit(cache=True, inline="always")
+def walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz):
+    return chain_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz)
 
 
-def __getattr__(name):
-    # the forest driver moved to tether/solve.py; callers that import it from here keep working
-    # (solve.py imports this module, so it cannot be imported at the top)
-    if name in _SOLVE_NAMES:
-        from . import solve
+@njit(cache=True, inline="always")
+def reduce(t, p, k):
+    return chain_reduce(t, p, k)
 
-        return getattr(solve, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+@njit(cache=True, inline="always")
+def back_substitute(t, p, k, aax, aay, aaz, acc):
+    return chain_back_substitute(t, p, k, aax, aay, aaz, acc)
+
+
+@njit(cache=True, inline="always")
+def share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh):
+    chain_share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh)

@@ -34,6 +34,7 @@ import math
 import numpy as np
 
 from .._jit import njit
+from ..bodies.registry import part_named
 from ..kernel.vec3 import inv3  # real or complex blocks: the complex shift of RADAU5's second system
 from ..kernel.layout import (
     FORM_COWELL,
@@ -79,8 +80,12 @@ from ..kernel.layout import (
     TT_TENSION_ONLY,
     TT_TIP_M,
 )
+from .rod import strain
 
 SQ3 = math.sqrt(3.0)
+# the body part types whose bodies the structured matrix models (as point masses at their joints,
+# a rigid body's attitude and wheels bordered on); any other part runs with the dense matrix
+_STRUCTURED_PARTS = (part_named("point").code, part_named("rigid").code)
 B_MAA, B_MAB, B_KEL, B_KV = 0, 9, 18, 27
 BLK_SIZE = 36
 F_SINV, F_Q = 0, 9
@@ -134,6 +139,10 @@ def structure_supported(p, n_state, second_order):
     nbody = int(p[H_NBODY])
     offroots = int(p[H_OFF_ROOTS])
     roots = [int(p[offroots + i]) for i in range(nroot)]
+    for b in range(nbody):
+        kind = int(p[offb + b * BT_SIZE + BT_RIGID])  # the BT_PART slot
+        if kind not in _STRUCTURED_PARTS:
+            return f"body {b} is a part of kind {kind} (bodies/registry.py), which the structured matrix does not model"
     if nroot < 1 or roots[0] != 0:
         return f"root list {roots} does not start with body 0"
     for i, b in enumerate(roots):
@@ -232,7 +241,7 @@ def rod_blocks(y, p, m1, blk):
                 return 1
             u = (d[0] / dn, d[1] / dn, d[2] / dn)
             ell = 2.0 * SQ3 * dn
-            eps = ell / lu - 1.0
+            eps = strain(dn, lu)  # eqs. 2-3, the rod's own formula
             vrel = (2.0 * SQ3 * dd[0], 2.0 * SQ3 * dd[1], 2.0 * SQ3 * dd[2])
             uv = u[0] * vrel[0] + u[1] * vrel[1] + u[2] * vrel[2]
             epsd = uv / lu

@@ -48,7 +48,7 @@ from ..kernel.layout import (
     BS_SIZE,
     BS_ROT,
     BS_V,
-    BT_PART,
+    BT_AOFF,
     BT_QOFF,
     BT_SIZE,
     FAIL_NONFINITE,
@@ -64,7 +64,6 @@ from ..kernel.layout import (
     H_OFF_ROOTS,
     H_OFF_SCR,
     H_OFF_TETH,
-    PART_RIGID,
     SJ_J,
     SJ_S,
     SJ_SINV,
@@ -80,7 +79,7 @@ from ..kernel.layout import (
     TT_SIZE,
     WS_SIZE,
 )
-from .chain import chain_back_substitute, chain_reduce, chain_walk
+from .parts import tether_back_substitute, tether_reduce, tether_walk
 from .rod import fail, next_joint
 
 
@@ -115,7 +114,7 @@ def forward(t, q, qd, att, p, with_forces):
         p[ts + TS_A + 3] = avx
         p[ts + TS_A + 4] = avy
         p[ts + TS_A + 5] = avz
-        code, ax, ay, az, avx, avy, avz = chain_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz)
+        code, ax, ay, az, avx, avy, avz = tether_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz)
         if code != 0:
             return code
         p[ts + TS_B] = ax
@@ -163,7 +162,7 @@ def system_accelerations(t, q, qd, att, p, acc, datt):
             det = body_compliance(p, c, work)
             if det == 0.0 or not math.isfinite(det):
                 return fail(p, FAIL_SINGULAR, g0 + int(p[tb + TT_NRODS]) - 1, t, 0.0)
-        code = chain_reduce(t, p, k)
+        code = tether_reduce(t, p, k)
         if code != 0:
             return code
         j0 = jscr + (g0 + k) * SJ_SIZE
@@ -188,7 +187,7 @@ def system_accelerations(t, q, qd, att, p, acc, datt):
         k = int(p[order + i])
         tb = offt + k * TT_SIZE
         aax, aay, aaz = body_point_acceleration(p, int(p[tb + TT_PARENT]), tscr + k * TS_SIZE)
-        code = chain_back_substitute(t, p, k, aax, aay, aaz, acc)
+        code = tether_back_substitute(t, p, k, aax, aay, aaz, acc)
         if code != 0:
             return code
         c = int(p[tb + TT_CHILD])
@@ -268,6 +267,6 @@ def joint_states(q, qd, att, p, out, bodies, rot):
         bs = bscr + b * BS_SIZE
         for j in range(6):
             bodies[b, j] = p[bs + BS_R + j]
-        if int(p[offb + b * BT_SIZE + BT_PART]) == PART_RIGID:
+        if p[offb + b * BT_SIZE + BT_AOFF] >= 0.0:  # a body with an attitude keeps its rotation
             for j in range(9):
                 rot[b, j] = p[bs + BS_ROT + j]

@@ -224,12 +224,11 @@ def _power_balance(rows_out):
             rows_out.append({"case": label + f": run failed ({r.message})", "max |dE + W_d| / budget": math.inf})
             worst = math.inf if kind == "energy" else worst
             continue
-        h = r.y.shape[1] // 2
         lu = m.rod_lengths()
         pw = np.zeros(len(ts))
         for i in range(n):
-            d = r.y[:, 3 + 3 * i : 6 + 3 * i]
-            dd = r.y[:, h + 3 + 3 * i : h + 6 + 3 * i]
+            d = r.y[:, m.state.rod(i)]
+            dd = r.y[:, m.state.rod_rate(i)]
             u = d / np.linalg.norm(d, axis=1)[:, None]
             epsd = 2.0 * math.sqrt(3.0) * np.einsum("ij,ij->i", u, dd) / lu[i]
             pw += POWER_DAMPING_N_S * lu[i] * epsd**2
