@@ -13,7 +13,15 @@ from typing import Any
 from ..errors import SceneError
 from ..model import topology
 from .bodies import _parse_bodies
-from .checks import _check_forest, _check_layout, _check_orbits_duration, _check_run
+from .checks import (
+    _check_above_surface,
+    _check_epoch,
+    _check_forest,
+    _check_layout,
+    _check_orbits_duration,
+    _check_run,
+    _check_stop_altitude,
+)
 from .data import SINGULAR_AT_ORIGIN, OutputSpec, Scene
 from .keys import _reject_non_finite, _required, _string, _table
 from .orbit import _parse_orbit
@@ -85,13 +93,16 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     effects = _parse_effects(_required(top, "effects", "", "a table of effects, e.g. central_gravity = {}"))
     origin_singular = [e.name for e in effects if e.name in SINGULAR_AT_ORIGIN]
     bodies = _parse_bodies(
-        _required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu, origin_singular
+        _required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu, origin_singular,
+        radius_m=central.radius_m,
     )
     effects = _expand_per_body(effects, bodies)
     tethers = _parse_tethers(top.get("tethers", {}), bodies)
     graph = topology.build(bodies, tethers)
     _check_forest(bodies, tethers, graph)
-    orbit = _parse_orbit(top["orbit"], bodies, mu) if "orbit" in top else None
+    orbit = _parse_orbit(top["orbit"], bodies, mu, central.radius_m) if "orbit" in top else None
+    _check_above_surface(bodies, orbit, central, origin_singular)
+    _check_epoch(effects, epoch)
     graph = graph.with_layout(bodies, tethers, orbit)
     tethers = _check_layout(bodies, tethers, orbit, mu, graph)
 
@@ -100,6 +111,8 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
         _check_orbits_duration(top["duration"], orbit, bodies, mu)
     integrator = _parse_integrator(top.get("integrator", {}))
     stop = _parse_stop(top["stop"], central) if "stop" in top else None
+    if stop is not None:
+        _check_stop_altitude(stop, orbit, bodies, central)
     scene = Scene(
         name=name,
         duration_s=duration_s,

@@ -13,7 +13,7 @@ from .data import CENTER_OF_MASS, MOTIONS, Body, Orbit
 from .keys import _NOTHING, _choice, _quoted, _string, _suggest, _table
 
 
-def _parse_orbit(value: Any, bodies: tuple[Body, ...], mu: float) -> Orbit:
+def _parse_orbit(value: Any, bodies: tuple[Body, ...], mu: float, radius_m: float | None = None) -> Orbit:
     path = "orbit"
     table = _table(value, path, ("reference", "elements", "position", "velocity", "motion"))
     names = [b.name for b in bodies]
@@ -25,12 +25,16 @@ def _parse_orbit(value: Any, bodies: tuple[Body, ...], mu: float) -> Orbit:
             f"{reference!r} (no such body)",
             hint=_suggest(reference, [CENTER_OF_MASS, *names]),
         )
-    position, velocity, elements = _parse_state(table, path)
+    position, velocity, elements = _parse_state(table, path, radius_m=radius_m)
     motion = _choice(table.get("motion", "corotating"), f"{path}.motion", MOTIONS)
     orbit = Orbit(reference, elements, position, velocity, motion)
     has_state = position is not None or elements is not None
     if has_state:
-        r, _ = orbit.state(mu)
+        with np.errstate(all="ignore"):  # a size near 0 or 1e308 overflows: refused below, not warned
+            r, v = orbit.state(mu)
+        if not (np.all(np.isfinite(r)) and np.all(np.isfinite(v))):
+            raise SceneError(f"{path}.{'elements' if elements is not None else 'position'}",
+                             "an initial state with finite position and velocity", f"{r.tolist()} m, {v.tolist()} m/s")  # fmt: skip
         if not np.linalg.norm(r) > 0.0:
             raise SceneError(f"{path}.position", "a position away from the centre of the central body", "the origin")
 

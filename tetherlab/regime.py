@@ -1,0 +1,163 @@
+"""Has a run left the regime its user assumed?  Warnings for the run summary, each with its time.
+
+A run can be correct to round-off and still not be the run its author meant. Checked after every
+run (``tetherlab.simulate`` puts them in ``result.stats["warnings"]``, ``tetherlab run`` in run.json
+and on the terminal):
+
+* **compression**: a rod of a tether without ``tension_only`` shortened below its natural length
+  (strain < ``COMPRESSION_STRAIN``): the TMED rod is a bar, it pushes as it pulls, which a real
+  tether cannot (docs/scenes.md, ``tension_only``);
+* **tumbling**: a tether's libration angle θ or φ passed ±90 degrees: the libration became a
+  rotation (a tumbling tether, or a spinning system whose spin is meant);
+* **slow-down**: the simulated time advanced ``SLOWDOWN_FACTOR`` times slower per wall-clock second
+  than at the start of the run (stiffness: a rod gone slack or nearly so, a collapse on the way);
+* **light rod**: a tether much lighter than the end masses it carries (ratio below
+  ``LIGHT_ROD_RATIO``): the rods' axial mode is then far faster than anything else, the step size
+  follows it and the rejected steps pile up; results drift with the tolerance
+  (docs/scenes.md, "A very light tether").
+
+Each warning is ``{"kind", "t_s", "text"}``, ``t_s`` the first time it happened (None when it is
+a property of the scene).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: strain below which a rod counts as compressed: far above round-off (1e-16 relative) and far
+#: below any strain a loaded tether has (1e-6 to 1e-2)
+COMPRESSION_STRAIN = -1e-9
+#: loss of simulated time per wall-clock second, from the run's first tenth to any later chunk
+SLOWDOWN_FACTOR = 100.0
+#: tether mass over the lighter end body's mass below which the rods' axial mode makes the run
+#: ill-conditioned (docs/scenes.md, "A very light tether": measured)
+LIGHT_ROD_RATIO = 1e-6
+
+
+def _fmt_t(t_s: float) -> str:
+    if abs(t_s) >= 2 * 86400.0:
+        return f"t = {t_s / 86400.0:.4g} d"
+    if abs(t_s) >= 2 * 3600.0:
+        return f"t = {t_s / 3600.0:.4g} h"
+    return f"t = {t_s:.6g} s"
+
+
+def _tethers(scene_dict: dict) -> dict:
+    t = scene_dict.get("tethers") or {}
+    return t if isinstance(t, dict) else {}
+
+
+def compression(ts, scene_dict: dict) -> list[dict]:
+    """Tethers (not tension-only) with a rod compressed, the first time and the strongest push."""
+    out = []
+    if ts is None or "t_s" not in getattr(ts, "columns", ()):
+        return out
+    t = np.asarray(ts["t_s"], float)
+    for name, spec in _tethers(scene_dict).items():
+        if isinstance(spec, dict) and spec.get("tension_only"):
+            continue
+        cols = [c for c in ts.columns if c.startswith(f"{name}.rod") and c.endswith(".strain")]
+        if not cols:
+            continue
+        strain = np.asarray(ts[cols], float)
+        with np.errstate(invalid="ignore"):  # NaN rows of a failed run count as not compressed
+            bad = np.any(strain < COMPRESSION_STRAIN, axis=1)
+        if not bad.any():
+            continue
+        first = int(np.argmax(bad))
+        fcols = [c.replace(".strain", ".axial_force_N") for c in cols if c.replace(".strain", ".axial_force_N") in ts.columns]
+        forces = np.asarray(ts[fcols], float) if fcols else np.full((1, 1), np.nan)
+        push = float(-np.min(np.where(np.isfinite(forces), forces, np.inf)))
+        out.append({
+            "kind": "compression",
+            "t_s": float(t[first]),
+            "text": f"tether {name!r} is in compression from {_fmt_t(t[first])} (at {bad.sum()} of {bad.size} outputs, "
+                    f"largest push {push:.3g} N): rods push unless the tether has tension_only = true",
+        })  # fmt: skip
+    return out
+
+
+def tumbling(dg) -> list[dict]:
+    """Tethers whose libration angle θ or φ passed ±90 degrees, the first time."""
+    out = []
+    if dg is None or "t_s" not in getattr(dg, "columns", ()):
+        return out
+    t = np.asarray(dg["t_s"], float)
+    for col in [c for c in dg.columns if c.endswith(".theta_rad")]:
+        name = col[: -len(".theta_rad")]
+        th = np.abs(np.asarray(dg[col], float))
+        ph = np.abs(np.asarray(dg.get(f"{name}.phi_rad", np.zeros_like(th)), float))
+        with np.errstate(invalid="ignore"):
+            over = (th > 0.5 * math.pi) | (ph >= 0.5 * math.pi)
+        if not over.any():
+            continue
+        first = int(np.argmax(over))
+        out.append({
+            "kind": "tumbling",
+            "t_s": float(t[first]),
+            "text": f"tether {name!r} passed a libration angle of 90 deg at {_fmt_t(t[first])}: it is tumbling "
+                    f"(rotating, not librating) from there on",
+        })  # fmt: skip
+    return out
+
+
+def slowdown(progress: list[tuple[float, float]]) -> list[dict]:
+    """A run whose simulated seconds per wall-clock second fell by SLOWDOWN_FACTOR or more.
+
+    ``progress``: (wall-clock s, simulated s) after each chunk of accepted steps (the progress
+    callback's calls); the reference rate is that of the first tenth of the chunks (at least 2)."""
+    if len(progress) < 12:
+        return []
+    w = np.array([p[0] for p in progress], float)
+    t = np.array([p[1] for p in progress], float)
+    dw, dt = np.diff(w), np.diff(t)
+    ok = dw > 0
+    if ok.sum() < 11:
+        return []
+    rate = np.where(ok, dt / np.where(ok, dw, 1.0), np.nan)
+    k0 = max(2, len(rate) // 10)
+    ref = np.nanmedian(rate[:k0])
+    if not ref > 0:
+        return []
+    slow = rate[k0:] < ref / SLOWDOWN_FACTOR
+    if not slow.any():
+        return []
+    first = k0 + int(np.argmax(slow))
+    worst = float(ref / max(np.nanmin(rate[k0:]), 1e-300))
+    return [{
+        "kind": "slow-down",
+        "t_s": float(t[first]),
+        "text": f"the run slowed down {worst:.3g} times from {_fmt_t(t[first])} (simulated time per wall-clock "
+                f"second, against its start): the system turned stiff (a slack or collapsing rod, a fast mode)",
+    }]  # fmt: skip
+
+
+def light_rods(scene) -> list[dict]:
+    """Tethers lighter than LIGHT_ROD_RATIO times the lighter of their end bodies."""
+    out = []
+    for t in getattr(scene, "tethers", ()):
+        ends = [scene.body(t.from_body).mass_kg, scene.body(t.to_body).mass_kg]
+        ends = [m for m in ends if m > 0]
+        if not ends or not t.mass_kg > 0:
+            continue
+        ratio = t.mass_kg / min(ends)
+        if ratio < LIGHT_ROD_RATIO:
+            out.append({
+                "kind": "light rod",
+                "t_s": None,
+                "text": f"tether {t.name!r} weighs {ratio:.3g} times its lighter end body (below {LIGHT_ROD_RATIO:g}): "
+                        f"the run is ill-conditioned, its rods' axial mode sets the steps and results drift with "
+                        f"the tolerance; model the tether massless-free with a heavier mass, or fewer rods "
+                        f"(docs/scenes.md, 'A very light tether')",
+            })  # fmt: skip
+    return out
+
+
+def check(scene, ts, dg, progress=()) -> list[dict]:
+    """Every warning of a run, in order of time (scene properties first)."""
+    scene_dict = scene.to_dict() if hasattr(scene, "to_dict") else (scene or {})
+    found = (light_rods(scene) if hasattr(scene, "tethers") else []) + compression(ts, scene_dict) + tumbling(dg)
+    found += slowdown(list(progress))
+    return sorted(found, key=lambda w: -math.inf if w["t_s"] is None else w["t_s"])
