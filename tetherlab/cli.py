@@ -106,6 +106,12 @@ def stop_reason(record: dict) -> str:
         return f"failed: {record.get('message', '')}"
     if by == "stop.altitude":
         alt = (scene.get("stop") or {}).get("altitude", "the stop altitude")
+        try:  # the stored scene says "200000.0 m": a reader thinks in km
+            value, unit = str(alt).split()
+            if unit == "m":
+                alt = f"{float(value) / 1e3:.6g} km"
+        except ValueError:
+            pass
         when = f" at {_fmt_time(float(t_end))}" if t_end is not None else ""
         return f"stop altitude {alt} reached{when}"
     if by:

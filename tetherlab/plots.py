@@ -12,20 +12,24 @@
 * ``ground-track.png``: geodetic latitude and longitude (runs about the Earth);
 * ``attitude.png`` per rigid body: roll, pitch, yaw, body rates, wheel speeds, control torque.
 
-Long runs are drawn as the band between the minimum and the maximum of each bin of outputs with
-the bin mean on it (``MAX_POINTS`` bins), not as thousands of overlapping oscillations. Angles are
+Long runs (more than ``MAX_POINTS`` outputs) are drawn as the band between the minimum and the
+maximum of each bin of outputs with the bin mean on it (``ENVELOPE_BINS`` bins), not as thousands of overlapping oscillations. Angles are
 unwrapped. :func:`figures` returns the matplotlib figures (the tests read their axes and legends);
 :func:`plot_run` saves them.
 """
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
 
-#: outputs drawn one by one up to this many; above, min/max bands of this many bins
+#: outputs drawn one by one up to this many; above, the min/max band and the mean of
+#: ENVELOPE_BINS bins (few enough that a bin spans several oscillations of a libration, so the
+#: mean shows the drift and the band the amplitude, instead of a solid block of lines)
 MAX_POINTS = 2000
+ENVELOPE_BINS = 400
 
 #: effects whose forces derive from a potential the energy diagnostic includes (the energy is
 #: then conserved); angular momentum about the central body's centre is conserved only under a
@@ -67,7 +71,7 @@ def _draw(ax, x, y, label=None, **kw):
     y = np.asarray(y, float)
     if x.size <= MAX_POINTS:
         return ax.plot(x, y, label=label, **kw)[0]
-    edges = np.linspace(0, x.size, MAX_POINTS + 1).astype(int)
+    edges = np.linspace(0, x.size, ENVELOPE_BINS + 1).astype(int)
     xs, lo, hi, mean = [], [], [], []
     with np.errstate(invalid="ignore"):
         for a, b in zip(edges[:-1], edges[1:]):
@@ -184,7 +188,7 @@ def figures(run_dir) -> dict:
 def _invariants(plt, res, tx, xlabel):
     dg = res.diagnostics
     energy_why, angmom_why = _not_conserved(res)
-    fig, ax = plt.subplots(2, 1, sharex=True, figsize=(8, 5.5))
+    fig, ax = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
     rows = (
         (ax[0], "energy_error_rel", "ΔE / energy scale", energy_why, "energy"),
         (ax[1], "angmom_error_rel", "|ΔH| / |H₀|", angmom_why, "angular momentum"),
@@ -196,8 +200,8 @@ def _invariants(plt, res, tx, xlabel):
             signed = dg[col].to_numpy(float) if col in dg.columns else y
             _draw(a, tx, signed, color="tab:gray")
             a.set_ylabel(f"{label} (change)")
-            a.set_title(f"{what}: not conserved by this run's physics ({', '.join(why)}); the change, not an error",
-                        fontsize=7, loc="left")  # fmt: skip
+            text = f"{what}: not conserved by this run's physics ({'; '.join(why)}); the curve is the change, not an error"
+            a.set_title(textwrap.fill(text, 110), fontsize=7, loc="left")
             continue
         nonzero = y[np.isfinite(y) & (y > 0)]
         if nonzero.size == 0:

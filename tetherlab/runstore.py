@@ -181,6 +181,7 @@ class _Store:
             folder = self.out / name
             folder.mkdir(exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=folder, prefix=".part-", suffix=".tmp")
+            os.fchmod(fd, _file_mode())  # pyarrow writes into the file mkstemp made 0600
             os.close(fd)
             try:
                 pq.write_table(table, tmp)

@@ -1,0 +1,461 @@
+"""What a new user meets in the first hour: the Python API, the command line, the checks made at
+load, the orbital outputs, the run summary's warnings and the figures of ``tetherlab plot``.
+
+Each test uses the input a user wrote (a scene written with ``a = "800 km"`` for an altitude, a
+wrong ``--method`` on the command line, ``tetherlab plot`` on a directory that holds no run ...).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import stat
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tetherlab
+from tetherlab.cli import main, run_summary
+from tetherlab.errors import SceneError
+from tetherlab.scene import Scene, load_scene
+
+from .helpers import MU_EARTH, ROOT, SCENES
+
+R_EARTH = 6378137.0  # m, the scene preset "earth" (WGS 84 a; tetherlab/scene/data.py CENTRAL_BODY_PRESETS)
+
+
+def _scene(**changes) -> dict:
+    """The README's first scene as a dictionary, with dotted-key changes."""
+    import tomllib
+
+    from tetherlab.scene.keys import _set_dotted
+
+    data = tomllib.loads((SCENES / "libration-inplane.toml").read_text())
+    for k, v in changes.items():
+        _set_dotted(data, k, v)
+    return data
+
+
+# -- the Python API ------------------------------------------------------------------------------
+
+
+def test_the_package_exports_what_a_user_needs():
+    from tetherlab.errors import SceneError as SE
+    from tetherlab.pipeline import SimulationError
+    from tetherlab.result import Result
+    from tetherlab.runstore import RunDirError
+
+    assert tetherlab.Scene is Scene
+    assert tetherlab.Result is Result
+    assert tetherlab.SceneError is SE
+    assert tetherlab.SimulationError is SimulationError
+    assert tetherlab.RunDirError is RunDirError
+    assert {"Scene", "Result", "SceneError", "SimulationError", "load_scene", "simulate"} <= set(tetherlab.__all__)
+    scene = tetherlab.Scene.from_dict(_scene())  # building a scene from a dict needs no deep import
+    assert scene.name == "libration-inplane"
+
+
+@pytest.mark.parametrize("bad, fragment", [(None, "NoneType"), ("studies/scenes/libration-inplane.toml", "load_scene"),
+                                           ({"name": "x"}, "from_dict")])  # fmt: skip
+def test_simulate_of_something_else_than_a_scene_is_a_clear_type_error(bad, fragment):
+    with pytest.raises(TypeError) as info:
+        tetherlab.simulate(bad)
+    assert "expected a tetherlab.Scene" in str(info.value)
+    assert fragment in str(info.value)
+
+
+# -- checks made at load -------------------------------------------------------------------------
+
+
+def test_a_semi_major_axis_written_for_an_altitude_is_refused_at_load():
+    # the user's scene: a = "800 km" meant as an altitude, 5578 km below the surface
+    with pytest.raises(SceneError) as info:
+        Scene.from_dict(_scene(**{"orbit.elements": {"a": "800 km", "e": 0.0}}))
+    err = info.value
+    assert err.key == "orbit.elements.a"
+    assert "below" in str(err) and "altitude" in str(err)
+
+
+def test_a_body_placed_inside_the_earth_is_refused_and_free_space_is_not_checked():
+    data = {"duration": "10 s", "effects": {"central_gravity": {}}, "output": {"count": 2},
+            "bodies": {"b": {"mass": "1 kg", "position": ["6000 km", "0 km", "0 km"], "velocity": ["0 m/s", "7 km/s", "0 m/s"]}}}  # fmt: skip
+    with pytest.raises(SceneError) as info:
+        Scene.from_dict(data)
+    assert info.value.key == "bodies.b.position"
+    # the same position in free space (no central body's gravity) is a valid scene
+    data["effects"] = {}
+    assert Scene.from_dict(data).bodies[0].position_m[0] == 6.0e6
+
+
+def test_altitudes_instead_of_a_semi_major_axis():
+    alt = Scene.from_dict(_scene(**{"orbit.elements": {"altitude": "800 km", "e": 0.0}}))
+    assert alt.orbit.elements.a_m == R_EARTH + 800e3  # a = R + h (docs/scenes.md, Elements)
+    pa = Scene.from_dict(_scene(**{"orbit.elements": {"perigee_altitude": "300 km", "apogee_altitude": "1000 km"}}))
+    rp, ra = R_EARTH + 300e3, R_EARTH + 1000e3
+    assert pa.orbit.elements.a_m == pytest.approx(0.5 * (rp + ra), rel=1e-15)
+    assert pa.orbit.elements.e == pytest.approx((ra - rp) / (ra + rp), rel=1e-15)
+    r, _ = pa.orbit.state(MU_EARTH)  # nu = 0: the start is the perigee
+    assert np.linalg.norm(r) - R_EARTH == pytest.approx(300e3, abs=1e-6)
+    p = Scene.from_dict(_scene(**{"orbit.elements": {"perigee_altitude": "300 km", "e": 0.1}}))
+    assert p.orbit.elements.a_m == pytest.approx(rp / 0.9, rel=1e-15)
+    # round trip: written back as a, read back the same
+    assert Scene.from_dict(pa.to_dict()) == pa
+    with pytest.raises(SceneError) as info:
+        Scene.from_dict(_scene(**{"orbit.elements": {"a": "7400 km", "altitude": "800 km", "e": 0.0}}))
+    assert info.value.key == "orbit.elements.a" and "a and altitude" in str(info.value)
+    with pytest.raises(SceneError) as info:
+        Scene.from_dict(_scene(**{"orbit.elements": {"perigee_altitude": "300 km", "apogee_altitude": "1000 km", "e": 0.1}}))
+    assert info.value.key == "orbit.elements.e"
+
+
+@pytest.mark.parametrize("effects", [
+    {"central_gravity": {}, "moon_de421": {}},
+    {"central_gravity": {}, "electrodynamic": {"current": "1 A", "field": "igrf14"}},
+    {"central_gravity": {}, "electrodynamic": {"current": "1 A", "eclipse": "conical"}},
+    {"central_gravity": {}, "drag": {"area": "1 m2", "atmosphere": "nrlmsis21", "f107": 150, "f107a": 150, "ap": 4}},
+])  # fmt: skip
+def test_a_dated_model_without_an_epoch_is_refused_at_load(effects):
+    with pytest.raises(SceneError) as info:
+        Scene.from_dict(_scene(effects=effects))
+    assert info.value.key == "epoch"
+    assert "dated" in str(info.value)
+    # with an epoch the same scene loads
+    Scene.from_dict(_scene(effects=effects, epoch="2026-01-01T00:00:00"))
+
+
+def test_a_stop_altitude_above_the_start_is_refused_at_load():
+    with pytest.raises(SceneError) as info:
+        Scene.from_dict(_scene(stop={"altitude": "1500 km"}))  # the orbit starts at 1022 km
+    assert info.value.key == "stop.altitude" and "below the start" in str(info.value)
+    Scene.from_dict(_scene(stop={"altitude": "200 km"}))
+
+
+def test_the_effects_table_of_the_docs_names_every_effect_and_parameter():
+    from tetherlab.forces import EFFECTS
+
+    doc = (ROOT / "docs" / "scenes.md").read_text()
+    start = doc.index("| effect | parameters |")
+    table = doc[start : doc.index("\n\n", start)]
+    for name, spec in EFFECTS.items():
+        row = next((line for line in table.splitlines() if f"`{name}`" in line), None)
+        assert row is not None, f"docs/scenes.md effects table has no row for {name}"
+        for pname in spec.params:
+            assert f"`{pname}`" in row, f"docs/scenes.md: effect {name} row lacks parameter {pname}"
+
+
+# -- orbital outputs -----------------------------------------------------------------------------
+
+
+def test_geodetic_coordinates_against_astropy():
+    from astropy import units as u
+    from astropy.coordinates import EarthLocation
+
+    from tetherlab.orbits.osculating import geodetic
+
+    rng = np.random.default_rng(3)
+    r = rng.normal(size=(200, 3))
+    r *= (R_EARTH + rng.uniform(-5e3, 4e7, size=200))[:, None] / np.linalg.norm(r, axis=1)[:, None]
+    r = np.vstack([r, [[6378137.0, 0, 0], [0, 0, 6356752.314245], [0, 0, -7e6]]])
+    lat, lon, h = geodetic(r)
+    # oracle: astropy's EarthLocation (ERFA gc2gd, WGS 84), an independent closed-form solution.
+    # Budget: 1 mm on the ground (1.5e-10 rad at the surface), far below what a ground track or
+    # an altitude history resolves; an error in the ellipsoid or the iteration is metres to km
+    loc = EarthLocation.from_geocentric(r[:, 0] * u.m, r[:, 1] * u.m, r[:, 2] * u.m).to_geodetic("WGS84")
+    assert np.max(np.abs(lat - loc.lat.to_value(u.rad))) < 1.5e-10
+    assert np.max(np.abs(np.angle(np.exp(1j * (lon - loc.lon.to_value(u.rad)))))) < 1.5e-10
+    assert np.max(np.abs(h - loc.height.to_value(u.m))) < 1e-3  # m
+    # the equator and the pole of the ellipsoid are at height 0 (NIMA TR8350.2 a and b)
+    assert abs(h[-3]) < 1e-6 and abs(h[-2]) < 1e-6 and lat[-2] == pytest.approx(math.pi / 2, abs=1e-15)
+
+
+def test_osculating_elements_agree_with_the_scalar_conversion():
+    from tetherlab.orbits.kepler import cartesian_to_elements, elements_to_cartesian
+    from tetherlab.orbits.osculating import elements
+
+    cases = [(7.4e6, 0.0, 0.0, 0.0, 0.0, 0.3), (7.0e6, 0.1, 0.6, 1.0, 2.0, 0.5), (8e6, 0.3, math.pi, 4.0, 5.0, 3.0),
+             (-9e6, 1.5, 0.4, 0.1, 0.2, 0.3)]  # fmt: skip
+    rv = [elements_to_cartesian(MU_EARTH, *c) for c in cases]
+    out = elements(MU_EARTH, np.array([r for r, _ in rv]), np.array([v for _, v in rv]))
+    for k, (r, v) in enumerate(rv):
+        ref = cartesian_to_elements(MU_EARTH, r, v)  # the package's scalar form (tests/test_kepler.py)
+        assert out["a_m"][k] == pytest.approx(ref.a, rel=1e-14)
+        assert out["eccentricity"][k] == pytest.approx(ref.e, abs=1e-14)
+        assert out["inclination_rad"][k] == pytest.approx(ref.i, abs=1e-14)
+        assert out["raan_rad"][k] == pytest.approx(ref.raan, abs=1e-12)
+        if ref.e > 1e-12:
+            assert np.angle(np.exp(1j * (out["argp_rad"][k] - ref.argp))) == pytest.approx(0.0, abs=1e-12)
+    # a rectilinear state has no orbital plane: NaN, not a number that looks right
+    assert np.isnan(elements(MU_EARTH, np.array([[7e6, 0, 0]]), np.array([[1e3, 0, 0]]))["inclination_rad"][0])
+
+
+@pytest.fixture(scope="module")
+def inplane_run(tmp_path_factory):
+    """The README's first example for 600 s (the compression starts at 443 s), run by the CLI."""
+    out = tmp_path_factory.mktemp("inplane") / "run"
+    scene = tmp_path_factory.mktemp("scene") / "libration-inplane.toml"
+    text = (SCENES / "libration-inplane.toml").read_text().replace('duration = "10 orbits"', 'duration = "600 s"')
+    scene.write_text(text)
+    assert main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    return out
+
+
+def test_every_orbital_run_has_altitude_elements_and_geodetic_columns(inplane_run):
+    from tetherlab.result import Result
+
+    dg = Result.load(inplane_run).diagnostics
+    for col in ("altitude_m", "a_m", "eccentricity", "inclination_rad", "raan_rad", "argp_rad",
+                "latitude_rad", "longitude_rad", "geodetic_height_m"):  # fmt: skip
+        assert col in dg.columns, col
+    # t = 0: the centre of mass is on the scene's circular orbit a = 7400 km (the scene file)
+    assert dg["altitude_m"].iloc[0] == pytest.approx(7400e3 - R_EARTH, abs=1e-6)
+    # over the run the tether's pull changes the centre of mass's osculating a by far less than
+    # 1 km (measured ~0.5 m; an error would show as the whole tether length, 5 km)
+    assert np.max(np.abs(dg["a_m"] - 7400e3)) < 1e3
+    # equatorial orbit: latitude 0 within the ellipsoid's flattening (the geodetic height is
+    # above the ellipsoid, the altitude above the mean sphere: they differ by < 21.4 km)
+    assert np.max(np.abs(dg["latitude_rad"])) < 1e-9
+    assert np.max(np.abs(dg["geodetic_height_m"] - dg["altitude_m"])) < 21.4e3
+
+
+# -- the command line ----------------------------------------------------------------------------
+
+
+def test_version_and_help(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["--version"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out.strip() == f"tetherlab {tetherlab.__version__}"
+    for argv in (["--help"], ["run", "--help"], ["validate", "--help"], ["plot", "--help"], ["sweep", "--help"]):
+        with pytest.raises(SystemExit):
+            main(argv)
+        text = capsys.readouterr().out
+        assert "``" not in text and "`" not in text, f"RST markup in {argv}: {text}"
+
+
+def test_a_bad_method_on_the_command_line_is_a_command_line_error(tmp_path, capsys):
+    rc = main(["run", str(SCENES / "libration-inplane.toml"), "--out", str(tmp_path / "x"), "--method", "rk45"])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert err.startswith("tetherlab: argument --method: expected one of dop853") and "'rk45'" in err
+    assert "scene key" not in err and not (tmp_path / "x").exists()
+
+
+@pytest.mark.parametrize("where", ["missing", "empty", "file"])
+def test_plot_on_a_wrong_directory_is_a_clear_error(tmp_path, capsys, where):
+    target = tmp_path / "nothing-here"
+    if where == "empty":
+        target.mkdir()
+    elif where == "file":
+        target.write_text("x")
+    rc = main(["plot", str(target)])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert err.startswith("tetherlab: ") and ("not a run directory" in err or "not a directory" in err)
+    assert "Traceback" not in err
+
+
+def test_a_subprocess_plot_on_a_wrong_directory_prints_no_traceback(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "tetherlab", "plot", str(tmp_path / "no-run")],
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr and "not a directory" in proc.stderr
+
+
+def test_validate_checks_and_estimates_without_running(tmp_path, capsys):
+    rc = main(["validate", str(SCENES / "deorbit-ed.toml")])
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert "valid scene" in out and "memory:" in out and "disk:" in out and "outputs: 6482 rows (output.step)" in out
+    bad = tmp_path / "bad.toml"
+    bad.write_text((SCENES / "libration-inplane.toml").read_text().replace('a = "7400 km"', 'a = "800 km"'))
+    assert main(["validate", str(bad)]) == 2
+    assert "orbit.elements.a" in capsys.readouterr().err
+
+
+def test_run_json_is_0644_rerunnable_and_the_default_out_is_runs_name(inplane_run, tmp_path, monkeypatch, capsys):
+    old = os.umask(0o022)
+    try:
+        mode = stat.S_IMODE((inplane_run / "run.json").stat().st_mode)
+        part = next((inplane_run / "timeseries").glob("part-*.parquet"))
+        assert mode == stat.S_IMODE(part.stat().st_mode) == 0o644
+        monkeypatch.chdir(tmp_path)
+        # the run directory's run.json, run again with no --out: runs/<scene name>
+        assert main(["run", str(inplane_run / "run.json")]) == 0
+        out = capsys.readouterr().out
+        assert (tmp_path / "runs" / "libration-inplane" / "run.json").is_file()
+        assert "end of the duration (600.0 s) at 600 s" in out
+        # a second time the default directory is taken: runs/<name>-2, never over the first
+        assert main(["run", str(inplane_run), "--quiet"]) == 0
+        assert (tmp_path / "runs" / "libration-inplane-2" / "run.json").is_file()
+    finally:
+        os.umask(old)
+    from tetherlab.result import Result
+
+    a = Result.load(inplane_run).timeseries
+    b = Result.load(tmp_path / "runs" / "libration-inplane").timeseries
+    assert a.equals(b)  # the stored scene reruns to the same numbers, bit for bit
+
+
+def test_the_summary_says_why_the_run_stopped_and_its_times_add_up():
+    record = {"ok": True, "status": 0, "rows_done": 5, "t_s": 3.3e6, "scene": {"name": "d", "stop": {"altitude": "200 km"}},
+              "stats": {"stopped_by": "stop.altitude", "compile_s": 2.0, "wall_s": 50.0, "session_wall_s": 30.0,
+                        "n_accepted": 1, "n_rejected": 0, "n_rhs": 10, "n_jac": 0}}  # fmt: skip
+    text = run_summary(record, "runs/d", 33.5)
+    assert "stop altitude 200 km reached at 38.19 d" in text
+    # set-up 3.5 + compile 2 + integrate 28 = 33.5 (this session); a resumed run also says the total
+    assert "set-up 3.50 s + compile 2.00 s + integrate and write 28.00 s = total 33.50 s" in text
+    assert "every session of this run so far: 50.00 s" in text
+
+
+def test_sweep_is_a_subcommand(tmp_path, capsys):
+    study = tmp_path / "s.toml"
+    scene = tmp_path / "p.toml"
+    scene.write_text('duration = "100 s"\n[effects]\ncentral_gravity = {}\n[bodies.b]\nmass = "1 kg"\n'
+                     '[orbit]\nreference = "b"\nelements = { altitude = "700 km", e = 0.0 }\n[output]\ncount = 3\n')  # fmt: skip
+    study.write_text('name = "t"\n[[case]]\nid = "c"\nscene = "p.toml"\nsummary = "tetherlab.summaries:final_state"\n'
+                     '[case.grid]\n"integrator.rtol" = [1e-8, 1e-9]\n')  # fmt: skip
+    rc = main(["sweep", str(study), "--out", str(tmp_path / "o"), "--workers", "1", "--quiet"])
+    assert rc == 0, capsys.readouterr()
+    assert (tmp_path / "o" / "c.csv").is_file()
+
+
+# -- warnings of the run summary -----------------------------------------------------------------
+
+
+def test_a_tether_in_compression_is_reported_with_its_time(inplane_run):
+    record = json.loads((inplane_run / "run.json").read_text())
+    kinds = {w["kind"]: w for w in record["warnings"]}
+    assert "compression" in kinds
+    w = kinds["compression"]
+    # the README scene starts straight and unstrained at 30 deg: the rods shorten within the run
+    assert 0.0 < w["t_s"] < 600.0 and "tension_only" in w["text"] and "'main'" in w["text"]
+
+
+def test_a_tension_only_tether_is_not_reported_in_compression():
+    import pandas as pd
+
+    from tetherlab.regime import compression
+
+    ts = pd.DataFrame({"t_s": [0.0, 1.0], "main.rod1.strain": [1e-4, -1e-3], "main.rod1.axial_force_N": [5.0, -50.0]})
+    assert compression(ts, {"tethers": {"main": {"tension_only": True}}}) == []
+    found = compression(ts, {"tethers": {"main": {}}})
+    assert found[0]["t_s"] == 1.0 and "50 N" in found[0]["text"]
+    # round-off around zero strain is no compression (COMPRESSION_STRAIN = -1e-9)
+    ts["main.rod1.strain"] = [1e-4, -1e-15]
+    assert compression(ts, {"tethers": {"main": {}}}) == []
+
+
+def test_tumbling_and_slow_down_are_reported_with_their_times():
+    import pandas as pd
+
+    from tetherlab.regime import slowdown, tumbling
+
+    t = np.linspace(0.0, 100.0, 101)
+    dg = pd.DataFrame({"t_s": t, "main.theta_rad": np.arctan2(np.sin(0.03 * t), np.cos(0.03 * t)), "main.phi_rad": 0 * t})
+    found = tumbling(dg)
+    assert len(found) == 1 and found[0]["t_s"] == pytest.approx(53.0)  # first output past pi/2 / 0.03 = 52.4 s
+    dg["main.theta_rad"] = 0.5 * np.sin(t)
+    assert tumbling(dg) == []
+    # 0.5 s chunks advancing 100 s each, then 0.5 s chunks advancing 0.5 s: 200 times slower
+    trace = [(0.5 * k, 100.0 * k) for k in range(20)] + [(9.5 + 0.5 * k, 1900.0 + 0.5 * k) for k in range(1, 10)]
+    found = slowdown(trace)
+    assert len(found) == 1 and "200 times" in found[0]["text"] and found[0]["t_s"] == 1900.0
+    assert slowdown([(0.5 * k, 100.0 * k) for k in range(40)]) == []
+
+
+def test_a_very_light_rod_is_warned_about():
+    from tetherlab.regime import LIGHT_ROD_RATIO, light_rods
+
+    # the user's scene: a 1e-6 kg rod under a 50 kg tip
+    scene = Scene.from_dict(_scene(**{"tethers.main.mass": "1e-6 kg", "bodies.mf.mass": "50 kg"}))
+    found = light_rods(scene)
+    assert len(found) == 1 and found[0]["kind"] == "light rod" and "'main'" in found[0]["text"]
+    ok = Scene.from_dict(_scene(**{"tethers.main.mass": f"{LIGHT_ROD_RATIO * 50 * 1.01} kg", "bodies.mf.mass": "50 kg"}))
+    assert light_rods(ok) == []
+
+
+# -- figures -------------------------------------------------------------------------------------
+
+
+def _labels(fig):
+    return [(a.get_xlabel(), a.get_ylabel(), a.get_title("left") or a.get_title()) for a in fig.axes]
+
+
+def test_plot_figures_have_units_legends_and_a_readable_invariants_axis(inplane_run):
+    import matplotlib.pyplot as plt
+
+    from tetherlab.plots import figures
+
+    figs = figures(inplane_run)
+    try:
+        assert {"libration.png", "tension.png", "invariants.png", "shape.png", "altitude.png", "elements.png",
+                "ground-track.png"} <= set(figs)  # fmt: skip
+        inv = figs["invariants.png"]
+        top, bottom = inv.axes
+        # energy: the paper model is not energy-conserving: drawn as a change, on a linear axis, said so
+        assert top.get_yscale() == "linear" and "not conserved" in top.get_title("left")
+        # angular momentum: an error on a log axis that starts near the smallest non-zero error,
+        # never at the 1e-300 floor a zero at t = 0 would put there
+        assert bottom.get_yscale() == "log" and bottom.get_ylim()[0] > 1e-19
+        assert "error" in bottom.get_ylabel() and "conserved by the model" in bottom.get_title("left")
+        lib = figs["libration.png"]
+        assert lib.axes[0].get_ylabel() == "in-plane θ (deg)" and lib.axes[1].get_xlabel() == "t (s)"
+        assert [t.get_text() for t in lib.axes[0].get_legend().get_texts()] == ["tether main"]
+        ten = figs["tension.png"].axes[0]
+        assert ten.get_ylabel().endswith("(N)") and ten.get_legend().get_texts()[0].get_text() == "tether main (rods 1-2)"
+        shape = figs["shape.png"]
+        assert [a.get_xlabel() for a in shape.axes] == ["along-track (m)", "cross-track (m)"]
+        assert all(t.get_text().endswith(" s") for t in shape.axes[0].get_legend().get_texts())
+        alt = figs["altitude.png"].axes[0]
+        assert alt.get_ylabel() == "altitude (km)"
+        km = alt.get_lines()[0].get_ydata()
+        assert km[0] == pytest.approx((7400e3 - R_EARTH) / 1e3, abs=1e-9)
+        el = figs["elements.png"]
+        assert [a.get_ylabel() for a in el.axes] == ["a (km)", "e (-)", "i (deg)", "Ω (deg)", "ω (deg)"]
+        gt = figs["ground-track.png"].axes[0]
+        assert gt.get_xlabel() == "longitude (deg)" and gt.get_ylabel() == "geodetic latitude (deg)"
+    finally:
+        for f in figs.values():
+            plt.close(f)
+
+
+def test_long_runs_are_drawn_as_bands_and_days_are_the_unit():
+    import matplotlib.pyplot as plt
+
+    from tetherlab.plots import ENVELOPE_BINS, _draw, time_axis
+
+    t = np.linspace(0.0, 40 * 86400.0, 200001)
+    x, label = time_axis(t, 6000.0)
+    assert label == "t (days)" and x[-1] == pytest.approx(40.0)
+    fig, ax = plt.subplots()
+    try:
+        line = _draw(ax, x, np.sin(t / 600.0))
+        assert len(line.get_xdata()) == ENVELOPE_BINS  # bin means, not 200 001 points
+        band = ax.collections[0].get_paths()[0].vertices
+        assert band[:, 1].max() == pytest.approx(1.0, abs=1e-3) and band[:, 1].min() == pytest.approx(-1.0, abs=1e-3)
+    finally:
+        plt.close(fig)
+
+
+def test_a_rigid_body_gets_its_attitude_figure(tmp_path):
+    import matplotlib.pyplot as plt
+
+    from tetherlab.plots import figures
+
+    scene = load_scene(SCENES / "rigid-wheels-control.toml").replace(duration="60 s", output={"count": 13})
+    tetherlab.simulate(scene, progress=False).save(tmp_path)
+    figs = figures(tmp_path)
+    try:
+        att = [k for k in figs if k.startswith("attitude-")]
+        assert att, list(figs)
+        fig = figs[att[0]]
+        assert [a.get_ylabel() for a in fig.axes] == ["attitude (deg)", "inertial rate, body axes (deg/s)",
+                                                    "wheel speed (rpm)", "control torque, body axes (N m)"]  # fmt: skip
+        assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["roll", "pitch", "yaw"]
+        assert all(t.get_text().startswith("wheel ") for t in fig.axes[2].get_legend().get_texts())
+    finally:
+        for f in figs.values():
+            plt.close(f)
