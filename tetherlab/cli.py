@@ -234,6 +234,9 @@ def _validate(args) -> int:
             f"  cost per right-hand side grows linearly with the rods ({rods}); the number of steps is "
             f"known only by running (a short run with a smaller duration measures it)",
         ]
+    from .regime import light_rods
+
+    lines += [f"  warning: {w['text']}" for w in light_rods(scene)]
     print("\n".join(lines))
     return 0
 

@@ -11,9 +11,9 @@ and on the terminal):
   rotation (a tumbling tether, or a spinning system whose spin is meant);
 * **slow-down**: the simulated time advanced ``SLOWDOWN_FACTOR`` times slower per wall-clock second
   than at the start of the run (stiffness: a rod gone slack or nearly so, a collapse on the way);
-* **light rod**: a tether much lighter than the end masses it carries (ratio below
-  ``LIGHT_ROD_RATIO``): the rods' axial mode is then far faster than anything else, the step size
-  follows it and the rejected steps pile up; results drift with the tolerance
+* **light rod**: a tether so much lighter than the lighter of its end bodies that the round-off
+  floor of the solution, about EPS * M / m, lies above the requested ``rtol``: the integrator
+  then chases noise (steps and rejections pile up) and the results drift with the tolerance
   (docs/scenes.md, "A very light tether").
 
 Each warning is ``{"kind", "t_s", "text"}``, ``t_s`` the first time it happened (None when it is
@@ -31,9 +31,9 @@ import numpy as np
 COMPRESSION_STRAIN = -1e-9
 #: loss of simulated time per wall-clock second, from the run's first tenth to any later chunk
 SLOWDOWN_FACTOR = 100.0
-#: tether mass over the lighter end body's mass below which the rods' axial mode makes the run
-#: ill-conditioned (docs/scenes.md, "A very light tether": measured)
-LIGHT_ROD_RATIO = 1e-6
+#: double-precision round-off: a tether of mass m joining bodies of mass M >> m carries a relative
+#: error floor of about EPS * M / m (measured: docs/scenes.md, "A very light tether")
+EPS = float(np.finfo(float).eps)
 
 
 def _fmt_t(t_s: float) -> str:
@@ -135,22 +135,24 @@ def slowdown(progress: list[tuple[float, float]]) -> list[dict]:
 
 
 def light_rods(scene) -> list[dict]:
-    """Tethers lighter than LIGHT_ROD_RATIO times the lighter of their end bodies."""
+    """Tethers whose mass ratio puts the round-off floor EPS * M / m above the scene's rtol."""
     out = []
+    rtol = float(getattr(getattr(scene, "integrator", None), "rtol", 1e-10))
     for t in getattr(scene, "tethers", ()):
         ends = [scene.body(t.from_body).mass_kg, scene.body(t.to_body).mass_kg]
         ends = [m for m in ends if m > 0]
         if not ends or not t.mass_kg > 0:
             continue
         ratio = t.mass_kg / min(ends)
-        if ratio < LIGHT_ROD_RATIO:
+        floor = EPS / ratio
+        if floor > rtol:
             out.append({
                 "kind": "light rod",
                 "t_s": None,
-                "text": f"tether {t.name!r} weighs {ratio:.3g} times its lighter end body (below {LIGHT_ROD_RATIO:g}): "
-                        f"the run is ill-conditioned, its rods' axial mode sets the steps and results drift with "
-                        f"the tolerance; model the tether massless-free with a heavier mass, or fewer rods "
-                        f"(docs/scenes.md, 'A very light tether')",
+                "text": f"tether {t.name!r} weighs {ratio:.3g} times its lighter end body: the round-off floor of the "
+                        f"run, about {floor:.2g} relative, is above its rtol {rtol:g}, so steps are rejected chasing "
+                        f"noise and results drift with the tolerance; a tether at least {EPS / rtol:.2g} times its "
+                        f"end mass keeps the floor below rtol (docs/scenes.md, 'A very light tether')",
             })  # fmt: skip
     return out
 

@@ -106,7 +106,8 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     graph = graph.with_layout(bodies, tethers, orbit)
     tethers = _check_layout(bodies, tethers, orbit, mu, graph)
 
-    duration_s, duration_orbits = _parse_duration(_required(top, "duration", "", "a time (e.g. '6000 s') or 'N orbits'"))
+    duration_raw = _required(top, "duration", "", "a time (e.g. '6000 s'), 'N orbits' or 'N spins'")
+    duration_s, duration_orbits = _parse_duration(_spins_to_seconds(duration_raw, orbit))
     if duration_orbits is not None:
         _check_orbits_duration(top["duration"], orbit, bodies, mu)
     integrator = _parse_integrator(top.get("integrator", {}))
@@ -134,3 +135,22 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     scene = dataclasses.replace(scene, output=output)
     _check_run(scene)
     return scene
+
+
+_SPINS_RE = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*spins?\s*$")
+
+
+def _spins_to_seconds(raw: Any, orbit) -> Any:
+    """``duration = "N spins"``: N turns of ``[orbit] spin`` (2 pi / |rate| each), as seconds."""
+    import math
+
+    match = _SPINS_RE.match(raw) if isinstance(raw, str) else None
+    if match is None:
+        return raw
+    spin = getattr(orbit, "spin", None)
+    if spin is None:
+        raise SceneError("duration", "a time or 'N orbits': 'N spins' needs [orbit] spin to say which spin", repr(raw))
+    n = float(match.group(1))
+    if not (math.isfinite(n) and n > 0.0):
+        raise SceneError("duration", "a number of spins > 0", repr(raw))
+    return f"{n * 2.0 * math.pi / abs(spin.rate_rad_s)!r} s"
