@@ -522,3 +522,25 @@ def test_n_spins_without_a_spin_is_refused():
     with pytest.raises(SceneError) as info:
         Scene.from_dict(d)
     assert info.value.key == "duration" and "[orbit] spin" in str(info.value)
+
+
+# -- the verification report, for a reader who was not there -------------------------------------
+
+
+def test_every_gate_has_evidence_outside_the_gate_table():
+    import tomllib
+
+    from tetherlab.verify.sections import gate_section
+
+    gates = tomllib.loads((ROOT / "references" / "gates.toml").read_text())
+    home = {g: gate_section(g) for g in gates if isinstance(gates[g], dict)}
+    assert [g for g, sec in home.items() if sec == "gates"] == []
+
+
+def test_report_tables_leave_out_nan_columns_and_say_so():
+    from tetherlab.report import _unit, table
+
+    md = table([{"case": "n = 1", "days": 35.1, "paper": float("nan")}, {"case": "n = 4", "days": 35.2, "paper": "nan"}])
+    assert "paper" not in md.splitlines()[0] and "| nan" not in md
+    assert "left out, no value in any row: paper" in md
+    assert _unit("1") == "ratio (no unit)" and _unit("m") == "m"
