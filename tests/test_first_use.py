@@ -544,3 +544,44 @@ def test_report_tables_leave_out_nan_columns_and_say_so():
     assert "paper" not in md.splitlines()[0] and "| nan" not in md
     assert "left out, no value in any row: paper" in md
     assert _unit("1") == "ratio (no unit)" and _unit("m") == "m"
+
+
+def test_the_fidelity_figure_shows_each_level_against_the_first(tmp_path, monkeypatch):
+    import matplotlib.pyplot as plt
+
+    from .helpers import forget_study, import_study
+
+    fid = import_study("fidelity")
+    drawn = {}
+    monkeypatch.setattr(plt.Figure, "savefig", lambda self, path, **kw: drawn.setdefault("fig", self))
+    t = np.linspace(0.0, 35.0, 200)
+    series = [{"label": f"level {k}", "t_d": t * (1 + 0.01 * k), "alt_km": 1000.0 - 800.0 * t / 35.0} for k in range(3)]
+    try:
+        fid.plot(series, tmp_path / "f.png")
+    finally:
+        forget_study("fidelity")
+    top, diff = drawn["fig"].axes
+    assert top.get_ylabel() == "satellite altitude (km)" and diff.get_ylabel() == "altitude − level 0 (km)"
+    assert len(diff.get_lines()) == 2 + 1  # levels 1 and 2, and the zero line
+    # level 2 is 2 % slower: at t = 30 d it is 800 * 30/35 * (1 - 1/1.02) = 13.4 km higher
+    line = diff.get_lines()[1]  # level 1, level 2, then the zero line
+    x, y = line.get_xdata(), line.get_ydata()
+    assert np.interp(30.0, x, y) == pytest.approx(800.0 * 30.0 / 35.0 * (1 - 1 / 1.02), rel=1e-3)
+    plt.close(drawn["fig"])
+
+
+def test_a_first_run_says_that_it_compiles(tmp_path, monkeypatch, caplog):
+    import logging
+
+    from tetherlab import _jit
+
+    monkeypatch.setattr(_jit, "CACHE_DIR", tmp_path / "empty-cache")
+    with caplog.at_level(logging.INFO, logger="tetherlab"):
+        _jit.announce_compilation()
+    assert "compiling the numerical kernels" in caplog.text and "once" in caplog.text
+    caplog.clear()
+    (tmp_path / "empty-cache").mkdir()
+    (tmp_path / "empty-cache" / "k.nbi").write_text("")
+    with caplog.at_level(logging.INFO, logger="tetherlab"):
+        _jit.announce_compilation()
+    assert caplog.text == ""  # a warm cache: nothing to say
