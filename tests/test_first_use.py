@@ -585,3 +585,12 @@ def test_a_first_run_says_that_it_compiles(tmp_path, monkeypatch, caplog):
     with caplog.at_level(logging.INFO, logger="tetherlab"):
         _jit.announce_compilation()
     assert caplog.text == ""  # a warm cache: nothing to say
+
+
+def test_validate_with_a_probe_extrapolates_the_run_time(tmp_path, capsys, inplane_run):
+    scene = tmp_path / "long.toml"
+    scene.write_text((SCENES / "libration-inplane.toml").read_text().replace('duration = "10 orbits"', 'duration = "1000 orbits"'))
+    assert main(["validate", str(scene), "--probe", "1"]) == 0
+    out = capsys.readouterr().out
+    probe = next(line for line in out.splitlines() if "probe:" in line)
+    assert "s simulated per second" in probe and "would integrate in about" in probe

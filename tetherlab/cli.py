@@ -237,8 +237,59 @@ def _validate(args) -> int:
     from .regime import light_rods
 
     lines += [f"  warning: {w['text']}" for w in light_rods(scene)]
-    print("\n".join(lines))
+    print("\n".join(lines), flush=True)
+    if args.probe:
+        _enable_notices(False)
+        try:
+            print(probe_cost(scene, args.probe))
+        except (SceneError, ValueError) as exc:
+            _say(f"the probe run failed: {exc}")
+            return 2
     return 0
+
+
+class _ProbeDone(Exception):
+    pass
+
+
+def probe_cost(scene, wall_budget_s: float) -> str:
+    """Integrate ``scene`` for about ``wall_budget_s`` seconds of wall-clock time (after the
+    kernels are compiled), then extrapolate: simulated seconds per wall-clock second, and the
+    whole run's integration time at that rate. Stiffness that appears later in the run (a tether
+    going slack, a collapse, a lower orbit) is not seen by the probe."""
+    from . import _jit
+    from .pipeline import integrate_prepared, prepare
+
+    _jit.announce_compilation()
+    prep = prepare(scene)
+    p = prep.model.fresh_params()
+    t_end = float(prep.t_out[-1])
+    seen: list[tuple[float, float]] = []
+    start = [None]
+
+    def progress(t: float) -> None:
+        now = time.perf_counter()
+        if start[0] is None:  # the first chunk ends after the compilation: measure from there
+            start[0] = (now, float(t))
+            return
+        seen.append((now, float(t)))
+        if now - start[0][0] >= wall_budget_s:
+            raise _ProbeDone
+
+    try:
+        integrate_prepared(prep, p, progress)
+        finished = True
+    except _ProbeDone:
+        finished = False
+    if finished or not seen:
+        return f"  probe: the whole run ({_fmt_time(t_end)} simulated) took less than the probe's {wall_budget_s:g} s"
+    (w0, t0), (w1, t1) = start[0], seen[-1]
+    rate = (t1 - t0) / (w1 - w0)
+    left = (t_end - t1) / rate if rate > 0 else float("inf")
+    total = (w1 - w0) + left
+    return (f"  probe: {_fmt_time(t1 - t0)} simulated in {w1 - w0:.1f} s of wall time ({rate:.4g} s simulated per "
+            f"second); the whole run ({_fmt_time(t_end)}) would integrate in about {_fmt_time(total)} at this rate "
+            f"(stiffness later in the run is not seen by the probe)")
 
 
 def _plot(args) -> int:
@@ -296,6 +347,9 @@ def parser() -> argparse.ArgumentParser:
     v.add_argument("scene", help="scene file (TOML), or a run directory / run.json")
     v.add_argument("--method", help="check with this integrator method instead of the scene's")
     v.add_argument("--out", help="the output directory whose free disk space is checked (default runs/NAME)")
+    v.add_argument("--probe", type=float, default=0.0, metavar="SECONDS",
+                   help="also integrate for about SECONDS of wall-clock time and extrapolate the run's integration "
+                   "time (compiles the kernels first if needed)")  # fmt: skip
     v.set_defaults(func=_validate)
     p = sub.add_parser("plot", help="draw PNG figures of a run directory")
     p.add_argument("dir", help="a directory written by 'tetherlab run'")
