@@ -594,3 +594,21 @@ def test_validate_with_a_probe_extrapolates_the_run_time(tmp_path, capsys, inpla
     out = capsys.readouterr().out
     probe = next(line for line in out.splitlines() if "probe:" in line)
     assert "s simulated per second" in probe and "would integrate in about" in probe
+
+
+def test_warnings_from_parts_equal_warnings_from_the_whole_run():
+    import pandas as pd
+
+    from tetherlab.regime import check, check_parts
+
+    t = np.linspace(0.0, 100.0, 101)
+    ts = pd.DataFrame({"t_s": t, "main.rod1.strain": np.where(t > 40, -1e-3, 1e-3) * (1 + 0.01 * t),
+                       "main.rod1.axial_force_N": np.where(t > 40, -5.0, 5.0) * (1 + 0.01 * t)})  # fmt: skip
+    dg = pd.DataFrame({"t_s": t, "main.theta_rad": np.where(t > 70, 2.0, 0.1), "main.phi_rad": 0 * t})
+    scene = {"tethers": {"main": {}}}
+    whole = check(scene, ts, dg)
+    parts = check_parts(scene, [(ts.iloc[a:a + 30], dg.iloc[a:a + 30]) for a in range(0, 101, 30)])
+    assert whole == parts
+    assert [w["kind"] for w in whole] == ["compression", "tumbling"]
+    assert whole[0]["t_s"] == 41.0 and "at 60 of 101 outputs" in whole[0]["text"] and "10 N" in whole[0]["text"]
+    assert whole[1]["t_s"] == 71.0

@@ -49,9 +49,9 @@ def _tethers(scene_dict: dict) -> dict:
     return t if isinstance(t, dict) else {}
 
 
-def compression(ts, scene_dict: dict) -> list[dict]:
-    """Tethers (not tension-only) with a rod compressed, the first time and the strongest push."""
-    out = []
+def _compression_facts(ts, scene_dict: dict) -> dict:
+    """{tether: (first time, compressed outputs, outputs, largest push N)} of a table of outputs."""
+    out = {}
     if ts is None or "t_s" not in getattr(ts, "columns", ()):
         return out
     t = np.asarray(ts["t_s"], float)
@@ -64,43 +64,71 @@ def compression(ts, scene_dict: dict) -> list[dict]:
         strain = np.asarray(ts[cols], float)
         with np.errstate(invalid="ignore"):  # NaN rows of a failed run count as not compressed
             bad = np.any(strain < COMPRESSION_STRAIN, axis=1)
-        if not bad.any():
-            continue
-        first = int(np.argmax(bad))
         fcols = [c.replace(".strain", ".axial_force_N") for c in cols if c.replace(".strain", ".axial_force_N") in ts.columns]
         forces = np.asarray(ts[fcols], float) if fcols else np.full((1, 1), np.nan)
-        push = float(-np.min(np.where(np.isfinite(forces), forces, np.inf)))
-        out.append({
-            "kind": "compression",
-            "t_s": float(t[first]),
-            "text": f"tether {name!r} is in compression from {_fmt_t(t[first])} (at {bad.sum()} of {bad.size} outputs, "
-                    f"largest push {push:.3g} N): rods push unless the tether has tension_only = true",
-        })  # fmt: skip
+        push = float(-np.min(np.where(np.isfinite(forces), forces, np.inf))) if bad.any() else -math.inf
+        first = float(t[int(np.argmax(bad))]) if bad.any() else math.inf
+        out[name] = (first, int(bad.sum()), int(bad.size), push)
     return out
 
 
-def tumbling(dg) -> list[dict]:
-    """Tethers whose libration angle θ or φ passed ±90 degrees, the first time."""
-    out = []
+def _tumbling_facts(dg) -> dict:
+    """{tether: first time its libration angle passed 90 deg (inf: never)} of a table of outputs."""
+    out = {}
     if dg is None or "t_s" not in getattr(dg, "columns", ()):
         return out
     t = np.asarray(dg["t_s"], float)
     for col in [c for c in dg.columns if c.endswith(".theta_rad")]:
         name = col[: -len(".theta_rad")]
         th = np.abs(np.asarray(dg[col], float))
-        ph = np.abs(np.asarray(dg.get(f"{name}.phi_rad", np.zeros_like(th)), float))
+        ph = np.abs(np.asarray(dg[f"{name}.phi_rad"], float)) if f"{name}.phi_rad" in dg.columns else np.zeros_like(th)
         with np.errstate(invalid="ignore"):
             over = (th > 0.5 * math.pi) | (ph >= 0.5 * math.pi)
-        if not over.any():
-            continue
-        first = int(np.argmax(over))
-        out.append({
-            "kind": "tumbling",
-            "t_s": float(t[first]),
-            "text": f"tether {name!r} passed a libration angle of 90 deg at {_fmt_t(t[first])}: it is tumbling "
-                    f"(rotating, not librating) from there on",
-        })  # fmt: skip
+        out[name] = float(t[int(np.argmax(over))]) if over.any() else math.inf
     return out
+
+
+def _merge(a: dict, b: dict) -> dict:
+    """Facts of two consecutive tables of outputs as the facts of both."""
+    out = dict(a)
+    for k, v in b.items():
+        if k not in out:
+            out[k] = v
+        elif isinstance(v, tuple):
+            f0, n0, m0, p0 = out[k]
+            f1, n1, m1, p1 = v
+            out[k] = (min(f0, f1), n0 + n1, m0 + m1, max(p0, p1))
+        else:
+            out[k] = min(out[k], v)
+    return out
+
+
+def _compression_warnings(facts: dict) -> list[dict]:
+    return [{
+        "kind": "compression",
+        "t_s": first,
+        "text": f"tether {name!r} is in compression from {_fmt_t(first)} (at {n} of {m} outputs, largest push "
+                f"{push:.3g} N): rods push unless the tether has tension_only = true",
+    } for name, (first, n, m, push) in facts.items() if n > 0]  # fmt: skip
+
+
+def _tumbling_warnings(facts: dict) -> list[dict]:
+    return [{
+        "kind": "tumbling",
+        "t_s": first,
+        "text": f"tether {name!r} passed a libration angle of 90 deg at {_fmt_t(first)}: it is tumbling "
+                f"(rotating, not librating) from there on",
+    } for name, first in facts.items() if math.isfinite(first)]  # fmt: skip
+
+
+def compression(ts, scene_dict: dict) -> list[dict]:
+    """Tethers (not tension-only) with a rod compressed, the first time and the strongest push."""
+    return _compression_warnings(_compression_facts(ts, scene_dict))
+
+
+def tumbling(dg) -> list[dict]:
+    """Tethers whose libration angle θ or φ passed ±90 degrees, the first time."""
+    return _tumbling_warnings(_tumbling_facts(dg))
 
 
 def slowdown(progress: list[tuple[float, float]]) -> list[dict]:
@@ -159,7 +187,18 @@ def light_rods(scene) -> list[dict]:
 
 def check(scene, ts, dg, progress=()) -> list[dict]:
     """Every warning of a run, in order of time (scene properties first)."""
+    return check_parts(scene, [(ts, dg)], progress)
+
+
+def check_parts(scene, parts, progress=()) -> list[dict]:
+    """The same from the run's outputs in consecutive parts ((time series, diagnostics) pairs),
+    read one at a time: a long run's columns never have to be in memory together."""
     scene_dict = scene.to_dict() if hasattr(scene, "to_dict") else (scene or {})
-    found = (light_rods(scene) if hasattr(scene, "tethers") else []) + compression(ts, scene_dict) + tumbling(dg)
-    found += slowdown(list(progress))
+    comp: dict = {}
+    tumb: dict = {}
+    for ts, dg in parts:
+        comp = _merge(comp, _compression_facts(ts, scene_dict))
+        tumb = _merge(tumb, _tumbling_facts(dg))
+    found = (light_rods(scene) if hasattr(scene, "tethers") else []) + _compression_warnings(comp)
+    found += _tumbling_warnings(tumb) + slowdown(list(progress))
     return sorted(found, key=lambda w: -math.inf if w["t_s"] is None else w["t_s"])

@@ -208,18 +208,12 @@ class Result:
         return cls(ts, dg, run.get("stats", {}), status, run.get("message", ""), run.get("scene", {}), meta)
 
 
-def _read_parts(folder: Path, wanted=None) -> pd.DataFrame:
-    """The parts of a Parquet dataset in row order (part-000000, part-000001, ...); with
-    ``wanted(column) -> bool`` only those columns are read."""
+def _read_parts(folder: Path) -> pd.DataFrame:
+    """The parts of a Parquet dataset in row order (part-000000, part-000001, ...)."""
     parts = sorted(folder.glob("part-*.parquet"))
     if not parts:
         return pd.DataFrame()
-    columns = None
-    if wanted is not None:
-        import pyarrow.parquet as pq
-
-        columns = [c for c in pq.read_schema(parts[0]).names if wanted(c)]
-    return pd.concat([pd.read_parquet(f, columns=columns) for f in parts], ignore_index=True)
+    return pd.concat([pd.read_parquet(f) for f in parts], ignore_index=True)
 
 
 def _json_default(o):

@@ -552,15 +552,22 @@ def _run_in_memory(store: _Store, record: dict, progress):
 
 def _regime_warnings(store: _Store, trace) -> list[dict]:
     """The run summary's warnings (tetherlab/regime.py), from the columns they need read back
-    from the parts on disk (strains, axial forces, libration angles)."""
-    from .regime import check
-    from .result import _read_parts
+    from the parts on disk one part at a time (strains, axial forces, libration angles)."""
+    import pyarrow.parquet as pq
+
+    from .regime import check_parts
 
     def wanted(c: str) -> bool:
         return c == "t_s" or c.endswith((".strain", ".axial_force_N", ".theta_rad", ".phi_rad"))
 
-    ts, dg = (_read_parts(store.out / name, wanted) for name in TABLES)
-    return check(store.scene, ts, dg, trace)
+    def parts():
+        folders = [store.out / name for name in TABLES]
+        files = [sorted(f.glob("part-*.parquet")) for f in folders]
+        for ts_file, dg_file in zip(*files):
+            yield tuple(pq.read_table(f, columns=[c for c in pq.read_schema(f).names if wanted(c)]).to_pandas()
+                        for f in (ts_file, dg_file))  # fmt: skip
+
+    return check_parts(store.scene, parts(), trace)
 
 
 def _finish(store: _Store, record: dict, res, p, states, wall_s: float, chunks_before: int,
