@@ -301,13 +301,14 @@ def test_run_json_is_0644_rerunnable_and_the_default_out_is_runs_name(inplane_ru
 
 def test_the_summary_says_why_the_run_stopped_and_its_times_add_up():
     record = {"ok": True, "status": 0, "rows_done": 5, "t_s": 3.3e6, "scene": {"name": "d", "stop": {"altitude": "200 km"}},
+              "segments": 2,
               "stats": {"stopped_by": "stop.altitude", "compile_s": 2.0, "wall_s": 50.0, "session_wall_s": 30.0,
                         "n_accepted": 1, "n_rejected": 0, "n_rhs": 10, "n_jac": 0}}  # fmt: skip
     text = run_summary(record, "runs/d", 33.5)
     assert "stop altitude 200 km reached at 38.19 d" in text
     # set-up 3.5 + compile 2 + integrate 28 = 33.5 (this session); a resumed run also says the total
     assert "set-up 3.50 s + compile 2.00 s + integrate and write 28.00 s = total 33.50 s" in text
-    assert "every session of this run so far: 50.00 s" in text
+    assert "every session of this run so far, 2 sessions: 50.00 s" in text
 
 
 def test_sweep_is_a_subcommand(tmp_path, capsys):
@@ -612,3 +613,32 @@ def test_warnings_from_parts_equal_warnings_from_the_whole_run():
     assert [w["kind"] for w in whole] == ["compression", "tumbling"]
     assert whole[0]["t_s"] == 41.0 and "at 60 of 101 outputs" in whole[0]["text"] and "10 N" in whole[0]["text"]
     assert whole[1]["t_s"] == 71.0
+
+
+def test_the_summary_times_of_a_resumed_run_add_up_to_its_session(tmp_path, monkeypatch, capsys):
+    import re
+    import time
+
+    from tetherlab.integrators import driver
+    from tetherlab.runstore import Interrupted, run_to_dir
+
+    from .test_runstore import PART_ROWS, _interrupt_on_call, _scene
+
+    monkeypatch.setattr(driver, "_FIRST_CHUNK_STEPS", 16)
+    monkeypatch.setattr(driver, "_MAX_CHUNK_GROWTH", 1)
+    real = driver._call_kernel
+    out = tmp_path / "o"
+    _interrupt_on_call(monkeypatch, 6)
+    with pytest.raises(Interrupted):
+        run_to_dir(_scene(), out, progress=False, checkpoint_s=1e9, part_rows=PART_ROWS)
+    monkeypatch.setattr(driver, "_call_kernel", real)
+    t0 = time.perf_counter()
+    assert main(["run", "--resume", str(out)]) == 0
+    wall = time.perf_counter() - t0
+    text = capsys.readouterr().out
+    m = re.search(r"set-up ([\d.]+) s \+ compile ([\d.]+) s \+ integrate and write ([\d.]+) s = total ([\d.]+) s", text)
+    assert m, text
+    setup, comp, integ, total = map(float, m.groups())
+    assert abs(setup + comp + integ - total) <= 0.015  # printed to 0.01 s each
+    assert total <= wall + 0.01  # this session's time, not the interrupted session's as well
+    assert "every session of this run so far" in text

@@ -188,8 +188,9 @@ def run_summary(record: dict, out, total_s: float) -> str:
         f"  time: set-up {setup:.2f} s + compile {compile_s:.2f} s + integrate and write {session - compile_s:.2f} s"
         f" = total {setup + session:.2f} s",
     ]
-    if float(s.get("wall_s", session)) > session + 1e-9:
-        lines.append(f"  (integration over every session of this run so far: {float(s['wall_s']):.2f} s)")
+    if int(record.get("segments", 1) or 1) > 1:  # a resumed run: the sessions before this one count too
+        lines.append(f"  (integration over every session of this run so far, {record['segments']} sessions: "
+                     f"{float(s.get('wall_s', 0.0)):.2f} s)")  # fmt: skip
     return "\n".join(lines)
 
 
@@ -230,9 +231,9 @@ def _validate(args) -> int:
         lines += [
             f"  state: {need.state_len} floats; outputs: {need.rows} rows ({need.output_key})",
             f"  memory: {mem / GiB:.3g} GiB with every output in memory (tetherlab.simulate), of "
-            f"{available_memory_bytes() / GiB:.3g} GiB available; disk: {disk / GiB:.3g} GiB for `tetherlab run`",
+            f"{available_memory_bytes() / GiB:.3g} GiB available; disk: {disk / GiB:.3g} GiB for 'tetherlab run'",
             f"  cost per right-hand side grows linearly with the rods ({rods}); the number of steps is "
-            f"known only by running (a short run with a smaller duration measures it)",
+            f"known only by running: --probe SECONDS measures the rate on the start of the run",
         ]
     from .regime import light_rods
 
