@@ -642,3 +642,11 @@ def test_the_summary_times_of_a_resumed_run_add_up_to_its_session(tmp_path, monk
     assert abs(setup + comp + integ - total) <= 0.015  # printed to 0.01 s each
     assert total <= wall + 0.01  # this session's time, not the interrupted session's as well
     assert "every session of this run so far" in text
+
+
+def test_a_study_without_its_own_markdown_says_what_it_checks(tmp_path):
+    from tetherlab.verify.studies import _summary_md
+
+    md = _summary_md("deorbit", tmp_path)
+    assert md.startswith("**What this study checks, against what:** The electrodynamic de-orbit of paper section 5")
+    assert "``" not in md and ":func:" not in md and "PYTHONPATH" not in md
