@@ -200,5 +200,9 @@ def check_parts(scene, parts, progress=()) -> list[dict]:
         comp = _merge(comp, _compression_facts(ts, scene_dict))
         tumb = _merge(tumb, _tumbling_facts(dg))
     found = (light_rods(scene) if hasattr(scene, "tethers") else []) + _compression_warnings(comp)
-    found += _tumbling_warnings(tumb) + slowdown(list(progress))
+    turning = _tumbling_warnings(tumb)
+    if getattr(getattr(scene, "orbit", None), "spin", None) is not None:
+        for w in turning:  # a spinning system is meant to turn: say so rather than alarm
+            w["text"] += " (as the scene's [orbit] spin sets it going)"
+    found += turning + slowdown(list(progress))
     return sorted(found, key=lambda w: -math.inf if w["t_s"] is None else w["t_s"])
