@@ -650,3 +650,22 @@ def test_a_study_without_its_own_markdown_says_what_it_checks(tmp_path):
     md = _summary_md("deorbit", tmp_path)
     assert md.startswith("**What this study checks, against what:** The electrodynamic de-orbit of paper section 5")
     assert "``" not in md and ":func:" not in md and "PYTHONPATH" not in md
+
+
+def test_shape_snapshots_of_a_spinning_tether_cover_one_turn_in_free_space_too():
+    import pandas as pd
+
+    from tetherlab.plots import _snapshot_rows
+
+    # a 100 m tether spinning at 0.1 rad/s about z for 600 s (period 62.8 s), outputs every
+    # 62.8 s / 1.0001: evenly spaced snapshots over the run would all show nearly the same phase
+    t = np.arange(0.0, 600.0, 2 * np.pi / 0.1 / 1.0001 / 4)
+    ts = pd.DataFrame({"t_s": t, "main.node0.x_m": 0 * t, "main.node0.y_m": 0 * t, "main.node0.z_m": 0 * t,
+                       "main.node1.x_m": 100 * np.cos(0.1 * t), "main.node1.y_m": 100 * np.sin(0.1 * t),
+                       "main.node1.z_m": 0 * t})  # fmt: skip
+    dg = pd.DataFrame({"t_s": t, "main.theta_rad": np.full(len(t), np.nan)})  # free space: no orbit frame
+    rows = _snapshot_rows(ts, dg, ["main"], count=4)
+    phases = np.mod(0.1 * t[rows], 2 * np.pi)
+    # one snapshot per quarter turn (to the output spacing): four different directions
+    assert len(rows) == 4 and np.ptp(phases) > np.pi
+    assert t[rows[-1]] < 2 * np.pi / 0.1  # within the first turn

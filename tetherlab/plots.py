@@ -222,22 +222,31 @@ def _invariants(plt, res, tx, xlabel):
     return fig
 
 
-def _snapshot_rows(dg, tethers, count: int = 6) -> np.ndarray:
+def _snapshot_rows(ts, dg, tethers, count: int = 6) -> np.ndarray:
     """Rows for the shape snapshots: spread over one turn of the first tether when it turns more
     than half a turn in the run (a spinning system drawn at evenly spaced times commensurate with
-    its spin would show the same phase each time), else over the run."""
+    its spin would show the same phase each time), else over the run. The turn is measured by θ
+    in the orbital frame, or without an orbit frame (free space) by the angle the tether's
+    root-to-tip direction sweeps from output to output."""
     n = len(dg)
     if n <= count:
         return np.arange(n)
     t = dg["t_s"].to_numpy(float)
-    th = dg[f"{tethers[0]}.theta_rad"].to_numpy(float)
+    th = dg[f"{tethers[0]}.theta_rad"].to_numpy(float) if f"{tethers[0]}.theta_rad" in dg.columns else np.full(n, np.nan)
     if np.all(np.isfinite(th)):
         turned = np.unwrap(th)
-        rate = (turned[-1] - turned[0]) / (t[-1] - t[0]) if t[-1] > t[0] else 0.0
-        if abs(turned[-1] - turned[0]) > np.pi and rate != 0.0:
-            turn = 2 * np.pi / abs(rate)
-            want = t[0] + turn * np.arange(count) / count
-            return np.unique(np.searchsorted(t, want).clip(0, n - 1))
+        swept = turned[-1] - turned[0]
+    else:
+        nodes = sorted({int(c.split(".")[1][4:]) for c in ts.columns if c.startswith(f"{tethers[0]}.node") and c.endswith(".x_m")})
+        d = np.stack([ts[f"{tethers[0]}.node{nodes[-1]}.{a}_m"].to_numpy(float) - ts[f"{tethers[0]}.node{nodes[0]}.{a}_m"].to_numpy(float)
+                      for a in "xyz"], axis=1)  # fmt: skip
+        u = d / np.linalg.norm(d, axis=1, keepdims=True)
+        swept = float(np.nansum(np.arccos(np.clip(np.einsum("ij,ij->i", u[1:], u[:-1]), -1.0, 1.0))))
+    rate = swept / (t[-1] - t[0]) if t[-1] > t[0] else 0.0
+    if abs(swept) > np.pi and rate != 0.0:
+        turn = 2 * np.pi / abs(rate)
+        want = t[0] + turn * np.arange(count) / count
+        return np.unique(np.searchsorted(t, want).clip(0, n - 1))
     return np.linspace(0, n - 1, count).astype(int)
 
 
@@ -247,7 +256,7 @@ def _shape(plt, res, tethers):
     ts, dg = res.timeseries, res.diagnostics
     fig, ax = plt.subplots(1, 2, figsize=(10, 5))
     roots = [c[: -len(".vx_m_s")] for c in ts.columns if c.endswith(".vx_m_s")]
-    rows = _snapshot_rows(dg, tethers)
+    rows = _snapshot_rows(ts, dg, tethers)
     period = res.meta.get("model", {}).get("ref_period_s")
     tx, label = time_axis(ts["t_s"].to_numpy(float), period)
     unit = label[3:-1]
