@@ -116,11 +116,9 @@ def test_igrf_epoch_outside_the_coefficients_is_a_scene_error(epoch):
 
 
 def test_igrf_without_epoch_is_a_scene_error():
-    from tetherlab.pipeline import prepare
-
-    sc = _ed_scene(**{"epoch": None, "effects.electrodynamic.field": "igrf14", "duration": "1 d"})
+    # refused when the scene is made (scene/checks.py _check_epoch), not when the run is prepared
     with pytest.raises(SceneError) as err:
-        prepare(sc)
+        _ed_scene(**{"epoch": None, "effects.electrodynamic.field": "igrf14", "duration": "1 d"})
     assert err.value.key == "epoch"
 
 

@@ -83,7 +83,7 @@ def test_resume_after_interruption_runs_nothing_twice(tmp_path):
 
 def test_failed_runs_are_recorded_with_their_message(tmp_path):
     sc = scenes((7000,))
-    bad = sc[0].replace(**{"bodies.sat.elements.a": "6000 km"})  # inside the Earth: still integrates
+    bad = sc[0].replace(**{"bodies.sat.elements.a": "6600 km"})  # the summary fails, not the scene
     res = run_sweep([bad], failing_summary, cache_dir=tmp_path, workers=1, progress=False)
     (rec,) = res.records
     assert not rec.ok and rec.error == "RuntimeError: deliberate failure for sweep-test"

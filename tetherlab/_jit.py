@@ -55,6 +55,26 @@ except OSError:  # read-only home: numba falls back to __pycache__ next to the s
 
 njit = numba.njit
 
+
+def cache_is_cold() -> bool:
+    """True when no kernel of these sources has been compiled into the cache yet (a first run)."""
+    try:
+        return not any(CACHE_DIR.rglob("*.nbi"))
+    except OSError:
+        return True
+
+
+def announce_compilation() -> None:
+    """Say on the "tetherlab" logger that the first run compiles the kernels (about a minute,
+    longer on a loaded machine), so a first run is not a minute of silence."""
+    if cache_is_cold():
+        import logging
+
+        logging.getLogger("tetherlab").info(
+            "first run of these sources: compiling the numerical kernels (about a minute, once; "
+            "cached in %s)", CACHE_DIR,
+        )
+
 #: Right-hand-side ABI shared by all compiled integrators:
 #: ``status = rhs(t, y_ptr, dydt_ptr, params_ptr)``; status 0 means success, any other value is a
 #: model-specific failure code (the model writes details into its own parameter block).

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -320,6 +321,13 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     computed before the failure (or, with ``raise_on_failure=False``, returns that result with
     ``result.ok`` false and ``result.message`` saying when, where and why).
     """
+    from .scene import Scene
+
+    if not isinstance(scene, Scene):
+        hint = (" (a file name: load it first with tetherlab.load_scene(path))" if isinstance(scene, (str, Path))
+                else " (a dictionary: build it with tetherlab.Scene.from_dict(d))" if isinstance(scene, dict) else "")
+        raise TypeError(f"simulate(scene): expected a tetherlab.Scene, from tetherlab.load_scene(path) or "
+                        f"tetherlab.Scene.from_dict(d); got {type(scene).__name__} {scene!r:.60}{hint}")  # fmt: skip
     prep = prepare(scene)
     p = prep.model.fresh_params()
     bar = _ProgressBar(prep.t_out[-1], enabled=progress)
@@ -329,6 +337,9 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     stats, message = run_outcome(prep, res, p, time.perf_counter() - t_wall)
     d = diag.compute(prep.model, res.t, res.y)
     result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)
+    from .regime import check as regime_check
+
+    result.stats["warnings"] = regime_check(scene, result.timeseries, result.diagnostics, bar.trace)
     if res.status != 0 and raise_on_failure:
         raise SimulationError(message, result)
     return result
@@ -565,8 +576,11 @@ class _ProgressBar:
         self.start = time.perf_counter()
         self.bar = None
         self.last = 0.0
+        # (wall-clock s, simulated s) after every chunk: the run summary's slow-down check (regime.py)
+        self.trace: list[tuple[float, float]] = []
 
     def update(self, t: float) -> None:
+        self.trace.append((time.perf_counter(), float(t)))
         if self.enabled is False:
             return
         if self.bar is None:

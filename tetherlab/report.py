@@ -87,16 +87,38 @@ def _cell(text) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
+def _empty(v) -> bool:
+    if v is None or (isinstance(v, str) and v.strip().lower() in ("", "nan")):
+        return True
+    try:
+        return v != v  # NaN
+    except Exception:  # noqa: BLE001 - an odd object is a value
+        return False
+
+
 def table(rows) -> str:
+    """A Markdown table of ``rows`` (dicts); columns empty or NaN in every row are left out and
+    named under the table, so a reader never meets a column of nan."""
     if not rows:
         return ""
     keys = []
     for r in rows:
         keys += [k for k in r if k not in keys]
+    dropped = [k for k in keys if all(_empty(r.get(k)) for r in rows)]
+    keys = [k for k in keys if k not in dropped]
+    if not keys:
+        return f"(no values: every column is empty: {', '.join(map(str, dropped))})"
     lines = ["| " + " | ".join(_cell(k) for k in keys) + " |", "|" + "---|" * len(keys)]
     for r in rows:
         lines.append("| " + " | ".join(_cell(_fmt(r.get(k, ""))) for k in keys) + " |")
+    if dropped:
+        lines += ["", f"*(left out, no value in any row: {', '.join(_cell(k) for k in dropped)})*"]
     return "\n".join(lines)
+
+
+def _unit(u) -> str:
+    """A gate's unit as a reader reads it: "1" is a ratio without unit."""
+    return "ratio (no unit)" if str(u).strip() == "1" else _cell(u)
 
 
 _RESULT = {"PASS": '<span class="pass">PASS</span>', "FAIL": '<span class="fail">FAIL</span>',
@@ -120,12 +142,15 @@ class Document:
     commit: tuple
     footer: str
     matrix_md: str
+    descriptions: dict = None  # section id -> what the section checks, against what (a docstring)
 
     def _evidence(self, gid: str) -> str:
         """A link to the section with the gate's table and figure (plain text if not in this run)."""
         sec = self.gate_section(gid)
         present = set(self.sections) | {f"study-{s[0]}" for s in self.studies} | {"controls", "gates"}
-        return f"[{sec}](#{sec})" if sec in present else f"{sec} (not run)"
+        title = self.sections[sec][0] if sec in self.sections else next(
+            (s[1] for s in self.studies if f"study-{s[0]}" == sec), sec)
+        return f"[{_cell(title)}](#{sec})" if sec in present and sec != "gates" else f"{_cell(title)} (not run)"
 
     def markdown(self) -> str:
         from . import mutants
@@ -167,13 +192,13 @@ class Document:
                "| gate | value | threshold | unit | result | evidence |", "|---|---|---|---|---|---|"]
         for r in self.gate_rows:
             gid = r["gate"]
-            md.append(f"| [{gid}](#gate-{gid}) | {_fmt(r['value'])} | {_fmt(r['threshold'])} | {_cell(r['unit'])} | "
+            md.append(f"| [{gid}](#gate-{gid}) | {_fmt(r['value'])} | {_fmt(r['threshold'])} | {_unit(r['unit'])} | "
                       f"{_RESULT.get(r['result'], r['result'])} | {self._evidence(gid)} |")  # fmt: skip
         md += ["", "### Definitions, sources and error budgets", ""]
         for gid, g in self.gates.items():
             kind = f" ({g['kind']})" if g.get("kind") else ""
             md += [f'<details id="gate-{gid}"><summary><code>{gid}</code>{kind}: {html.escape(g["quantity"])}</summary>', "",
-                   f"**Threshold:** {_fmt(g['threshold'])} {g['unit']}  ", f"**Source:** {g['source']}  ",
+                   f"**Threshold:** {_fmt(g['threshold'])} {_unit(g['unit'])}  ", f"**Source:** {g['source']}  ",
                    f"**Error budget / reason:** {g.get('budget', '(none stated)')}  ",
                    f"**Evidence:** {self._evidence(gid)}", "", "</details>", ""]
 
@@ -193,9 +218,10 @@ class Document:
                         "what it violates": m.source, "status": m.status,
                         "caught by": ", ".join(sorted(set(by_defect.get(m.name, [])))) or "-"}
                        for m in mutants.MUTANTS.values()]), "",
-                "### Gates without teeth", "",
-                "Gates that caught no defect, with the reason (a gate without one fails "
-                "`mutation_toothless_unexplained`):", "",
+                "### Gates that no deliberate defect reaches", "",
+                "A gate that none of the defects above makes fail is not proven able to fail by this matrix: either "
+                "no defect of the list touches what it measures, or the defects that do are too small for it. Each is "
+                "listed with the reason (a gate listed without one fails `mutation_toothless_unexplained`):", "",
             ]  # fmt: skip
             rows = [{"gate": f"[{g}](#gate-{g})", "reason": self.toothless.get(g, "**no reason given**")}
                     for g in self.gates if not by_gate.get(g)]
@@ -204,7 +230,17 @@ class Document:
 
         # -- checks
         for sid, (title, rows, wall) in self.sections.items():
-            md += [f'<h2 id="{sid}">{html.escape(title)}</h2>', "", f"*(measured in {wall:.0f} s)*", "", table(rows), ""]
+            md += [f'<h2 id="{sid}">{html.escape(title)}</h2>', ""]
+            what = " ".join(((self.descriptions or {}).get(sid) or "").split())
+            if what:
+                md += [f"**What is checked, against what:** {html.escape(what)}", ""]
+            mine = [g for g in self.gates if self.gate_section(g) == sid]
+            if mine:
+                md += ["**The gates of this section** (each number below its threshold passes):", ""]
+                md += [f"- [`{g}`](#gate-{g}): {html.escape(self.gates[g]['quantity'])} "
+                       f"(threshold {_fmt(self.gates[g]['threshold'])} {_unit(self.gates[g]['unit'])})" for g in mine]
+                md += [""]
+            md += [f"*(measured in {wall:.0f} s)*", "", table(rows), ""]
             for name, files in self.figures:
                 if self.figure_section.get(name) == sid:
                     md += [f"**{name}** (scene `studies/scenes/{name}.toml`):", ""]

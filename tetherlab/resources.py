@@ -110,7 +110,7 @@ def estimate(scene) -> Need | None:
     n = scene_layout(scene).size
     ts_cols = 1 + 6 + sum((6 if scene.body(t.to_body).mass_kg > 0 else 0) + 3 * (t.rods + 1) + 2 * t.rods
                           + (t.rods + 1) for t in tethers)  # fmt: skip  # not a state index: Result.from_run's columns
-    dg_cols = 18 + 2 * len(tethers)
+    dg_cols = 18 + 9 + 2 * len(tethers)  # (+ altitude, five elements, latitude, longitude, height)
     row_mem = 8 * (n + 2 * nr + 3 * nj + 16 + 6 * nj + 2 * ts_cols + 2 * dg_cols + 3)
     row_disk = 8 * (n + ts_cols + dg_cols)
     fixed = {}

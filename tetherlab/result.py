@@ -155,6 +155,7 @@ class Result:
                 dcols[f"{tet.name}.theta_rad"] = th
                 dcols[f"{tet.name}.phi_rad"] = ph
             dcols["com_radius_m"] = np.linalg.norm(rc, axis=1)
+            dcols.update(_orbital_columns(scene, model, np.asarray(t, float), rc, vc))
         dg = pd.DataFrame(dcols)
         scene_dict = scene.to_dict() if hasattr(scene, "to_dict") else {}
         meta = {
@@ -275,6 +276,28 @@ def _rigid_diagnostics(model, Y, d, bodies, rots, nrows) -> dict:
                 for j, ax in enumerate("xyz"):
                     out[f"{tet.name}.{side}_torque_{ax}_N_m"] = tq[:, j]
     _ = nrows
+    return out
+
+
+def _orbital_columns(scene, model, t, rc, vc) -> dict:
+    """Altitude and osculating elements of the centre of mass for a run about a central body
+    (central gravity among its effects), and over the Earth its geodetic latitude, longitude and
+    height (tetherlab/orbits/osculating.py)."""
+    from .orbits import osculating
+
+    central = getattr(scene, "central_body", None)
+    if central is None or "central_gravity" not in model.effect_names:
+        return {}
+    out = {"altitude_m": np.linalg.norm(rc, axis=1) - central.radius_m}
+    out.update(osculating.elements(central.mu_m3_s2, rc, vc))
+    if central.name == "earth":
+        theta0 = 0.0
+        if scene.epoch is not None:
+            from .environment.earth_orientation import earth_rotation_angle
+
+            theta0 = earth_rotation_angle(scene.epoch)["era_rad"]
+        lat, lon, height = osculating.geodetic(osculating.earth_fixed(t, rc, theta0))
+        out.update(latitude_rad=lat, longitude_rad=lon, geodetic_height_m=height)
     return out
 
 

@@ -104,9 +104,19 @@ class Interrupted(Exception):
 # ----------------------------------------------------------------------------------------------
 # small file helpers
 # ----------------------------------------------------------------------------------------------
+def _file_mode() -> int:
+    """The mode an ordinary new file gets under the process's umask (0644 under umask 022):
+    mkstemp's temporary files are 0600, which would make run.json unreadable to the group while
+    the Parquet parts beside it are readable."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
 def _atomic_write_bytes(path: Path, data: bytes) -> None:
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
+        os.fchmod(fd, _file_mode())
         with os.fdopen(fd, "wb") as f:
             f.write(data)
         os.replace(tmp, path)
@@ -180,6 +190,7 @@ class _Store:
             folder = self.out / name
             folder.mkdir(exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=folder, prefix=".part-", suffix=".tmp")
+            os.fchmod(fd, _file_mode())  # pyarrow writes into the file mkstemp made 0600
             os.close(fd)
             try:
                 pq.write_table(table, tmp)
@@ -529,7 +540,8 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
         finally:
             bar.close()
         # (still under the handlers: a signal now, with the integration done, lets it finish)
-        return _finish(store, record, res, p, states, wall_before + time.perf_counter() - t_wall, chunks_before)
+        return _finish(store, record, res, p, states, wall_before + time.perf_counter() - t_wall, chunks_before,
+                       session_start=t_wall, trace=bar.trace)  # fmt: skip
 
 
 def _sigma_restart(z) -> dict:
@@ -644,13 +656,35 @@ def _run_in_memory(store: _Store, record: dict, progress):
         raise Interrupted(store.out, math.nan, float(prep.t_out[-1]), 0, resumable=False) from None
     finally:
         bar.close()
-    return _finish(store, record, res, p, None, time.perf_counter() - t_wall, 0)
+    return _finish(store, record, res, p, None, time.perf_counter() - t_wall, 0, session_start=t_wall, trace=bar.trace)
 
 
-def _finish(store: _Store, record: dict, res, p, states, wall_s: float, chunks_before: int) -> dict:
+def _regime_warnings(store: _Store, trace) -> list[dict]:
+    """The run summary's warnings (tetherlab/regime.py), from the columns they need read back
+    from the parts on disk one part at a time (strains, axial forces, libration angles)."""
+    import pyarrow.parquet as pq
+
+    from .regime import check_parts
+
+    def wanted(c: str) -> bool:
+        return c == "t_s" or c.endswith((".strain", ".axial_force_N", ".theta_rad", ".phi_rad"))
+
+    def parts():
+        folders = [store.out / name for name in TABLES]
+        files = [sorted(f.glob("part-*.parquet")) for f in folders]
+        for ts_file, dg_file in zip(*files):
+            yield tuple(pq.read_table(f, columns=[c for c in pq.read_schema(f).names if wanted(c)]).to_pandas()
+                        for f in (ts_file, dg_file))  # fmt: skip
+
+    return check_parts(store.scene, parts(), trace)
+
+
+def _finish(store: _Store, record: dict, res, p, states, wall_s: float, chunks_before: int,
+            session_start: float | None = None, trace=()) -> dict:
     from .pipeline import run_outcome
     from .result import library_versions
 
+    t_finish = time.perf_counter()
     prep = store.prep
     out = store.out
     rows = int(len(res.t))
@@ -691,6 +725,10 @@ def _finish(store: _Store, record: dict, res, p, states, wall_s: float, chunks_b
 
     record["effect_evaluations"] = _effect_counts(p, prep.model)
     record["effect_meta"] = prep.model.effect_meta
+    record["warnings"] = _regime_warnings(store, trace)
+    # this session's wall time to here, the last parts written (wall_s counts every session of a
+    # resumed run and stops before the writing): the command line's times add up with it
+    stats["session_wall_s"] = time.perf_counter() - (session_start if session_start is not None else t_finish - wall_s)
     _write_json(out / RUN_JSON, record)
     (out / CHECKPOINT).unlink(missing_ok=True)
     return record

@@ -73,6 +73,11 @@ def table(epoch_tdb: str, duration_s: float, f107: float, f107a: float, ap: floa
 
     from . import earth_orientation
 
+    import logging
+
+    logging.getLogger("tetherlab").info(
+        "building the NRLMSIS 2.1 density table over the run (%.4g d; pymsis, about 15 s)", duration_s / 86400.0
+    )
     t0 = time.perf_counter()
     utc0 = _utc_datetime64(epoch_tdb)
     day0 = utc0.astype("datetime64[D]")

@@ -104,7 +104,7 @@ SPEC = register(
             "tether_cd": ParamSpec("", required=False, default=2.2, doc="drag coefficient of the tether cylinder"),
             "tether_diameter": ParamSpec("m", required=False, doc="tether diameter (default: the tether's own)"),
             "atmosphere": ParamSpec("", required=False, default="exponential", choices=("exponential", "nrlmsis21"),
-                                    doc="density model"),
+                                    doc="density model", dated=("nrlmsis21",)),
             "f107": ParamSpec("", required=False, doc="nrlmsis21: daily F10.7 (sfu)"),
             "f107a": ParamSpec("", required=False, doc="nrlmsis21: 81-day mean F10.7 (sfu)"),
             "ap": ParamSpec("", required=False, doc="nrlmsis21: daily Ap"),

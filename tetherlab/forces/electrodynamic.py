@@ -40,7 +40,7 @@ def _pack(params, central, ctx):
 
 FIELD_PARAMS = {
     "field": ParamSpec("", required=False, default="aligned", choices=tuple(magnetic.FIELD_CODES),
-                       doc="geomagnetic field model"),
+                       doc="geomagnetic field model", dated=("igrf14",)),
     "dipole_strength": ParamSpec("T m3", required=False, default=magnetic.IGRF13_DIPOLE_T_M3,
                                  doc="|K| = mu_0 m / (4 pi); default IGRF-13 2020 (dipole fields)"),
     "igrf_degree": ParamSpec("", required=False, default=13.0,
@@ -48,7 +48,8 @@ FIELD_PARAMS = {
     "greenwich_angle": ParamSpec("rad", required=False, default=None,
                                  doc="Earth rotation angle at t = 0 (override of the epoch's ERA)"),
     "eclipse": ParamSpec("", required=False, default="none", choices=tuple(eclipse.ECLIPSE_CODES),
-                         doc="current switched by the sunlit fraction of this shadow model"),
+                         doc="current switched by the sunlit fraction of this shadow model",
+                         dated=tuple(c for c in eclipse.ECLIPSE_CODES if c != "none")),
 }
 
 SPEC = register(

@@ -40,6 +40,8 @@ class ParamSpec:
     doc: str = ""
     choices: tuple[str, ...] | None = None
     per_body: bool = False
+    # choices whose model is dated: the scene must give an epoch (checked at load, scene/checks.py)
+    dated: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -50,6 +52,8 @@ class EffectSpec:
     params: dict[str, ParamSpec] = field(default_factory=dict)
     velocity_dependent: bool = False
     conservative: bool = False
+    # the effect's model is dated (an ephemeris): the scene must give an epoch (checked at load)
+    dated: bool = False
     # Packs the validated SI parameters (and the scene's central body) into the float block the
     # kernel reads.  Signature: pack(params_si, central, ctx) -> list[float], with
     # central = {"mu_m3_s2", "radius_m"} and ctx = {"bodies": names in kernel body order (0 = root,

@@ -74,6 +74,7 @@ SPEC_MOON = register(
         params={"mu": ParamSpec("m3 / s2", required=False, default=MU_MOON_M3_S2, doc="GM of the Moon")},
         velocity_dependent=False,
         conservative=False,
+        dated=True,
         pack=_pack("moon"),
     )
 )
@@ -86,6 +87,7 @@ SPEC_SUN = register(
         params={"mu": ParamSpec("m3 / s2", required=False, default=MU_SUN_M3_S2, doc="GM of the Sun")},
         velocity_dependent=False,
         conservative=False,
+        dated=True,
         pack=_pack("sun"),
     )
 )

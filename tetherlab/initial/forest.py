@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..system import SQ3, Model, attitude_block, center_of_mass
+from .spin import with_spin
 
 _PASSES = 3
 
@@ -122,6 +123,7 @@ def forest_state(scene, graph, model: Model, mu: float):
         motion = "translating"
     _, w_o = _orbit_frame(r_ref, v_ref)
     w_frame = w_o if (motion == "corotating" and w_o is not None) else np.zeros(3)
+    w_frame = with_spin(w_frame, orbit, r_ref, v_ref)
 
     # components (numbered as graph.roots) and their anchors
     comp_of = graph.component

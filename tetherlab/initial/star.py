@@ -15,6 +15,7 @@ from ..errors import SceneError
 from ..orbits.kepler import elements_to_cartesian
 from ..system import Model, center_of_mass, chain_state
 from .equilibrium import quasi_static, relative_equilibrium
+from .spin import with_spin
 
 
 def state_of(entity, mu: float):
@@ -81,6 +82,7 @@ def star_state(scene, graph, model: Model, mu: float, eq_model: Model | None = N
     # (a reference point at the centre has no orbit to corotate with: no rotation)
     rr2 = float(r_ref @ r_ref)
     omega = np.cross(r_ref, v_ref) / rr2 if motion in ("corotating", "equilibrium", "quasi-static") and rr2 > 0 else None
+    omega = with_spin(omega, orbit, r_ref, v_ref)
     dirs, strains = [], []
     for t in tethers:
         ini = t.initial

@@ -54,15 +54,62 @@ from .keys import (
 )
 
 
-_ELEMENT_KEYS = ("a", "e", "i", "raan", "argp", "nu")
+_ELEMENT_KEYS = ("a", "e", "i", "raan", "argp", "nu", "altitude", "perigee_altitude", "apogee_altitude")
+#: the ways of giving the orbit's size (one of them), each with the keys it reads
+_SIZE_KEYS = ("a", "altitude", "perigee_altitude", "apogee_altitude")
 
 
-def _parse_elements(value: Any, path: str) -> Elements:
-    table = _table(value, path, _ELEMENT_KEYS)
-    a = _quantity(_required(table, "a", path, LENGTH.describe()), f"{path}.a", LENGTH)
-    e_raw = _required(table, "e", path, "an eccentricity (a number >= 0, e.g. 0.01)")
+def _orbit_size(table: Mapping[str, Any], path: str, radius_m: float | None) -> tuple[float, Any, float, Any]:
+    """(a, the raw value a is reported with, e, the raw e) from a, altitude, perigee_altitude
+    and/or apogee_altitude (altitudes above the central body's radius)."""
+    given = [k for k in _SIZE_KEYS if k in table]
+    pair = set(given) == {"perigee_altitude", "apogee_altitude"}
+    if not given or (len(given) > 1 and not pair):
+        raise SceneError(
+            f"{path}.a",
+            "the orbit's size as one of: a (semi-major axis), altitude (a minus the central body's radius), "
+            "perigee_altitude, apogee_altitude, or perigee_altitude with apogee_altitude",
+            _NOTHING if not given else " and ".join(given),
+        )
+    if given == ["a"]:
+        a = _quantity(table["a"], f"{path}.a", LENGTH)
+        e_raw = _required(table, "e", path, "an eccentricity (a number >= 0, e.g. 0.01)")
+        return a, table["a"], _bounded(to_si(e_raw, DIMENSIONLESS, key=f"{path}.e"), f"{path}.e", DIMENSIONLESS, e_raw), e_raw
+    if radius_m is None:  # pragma: no cover - every caller passes the central body's radius
+        raise SceneError(f"{path}.{given[0]}", "a central body to measure the altitude from", _NOTHING)
+    h = {k: _quantity(table[k], f"{path}.{k}", LENGTH) for k in given}
+    for k, v in h.items():
+        if not v > -radius_m:
+            raise SceneError(f"{path}.{k}", f"an altitude above the centre of the central body (> {-radius_m:.6g} m)",
+                             shown(table[k]))  # fmt: skip
+    if pair:
+        if "e" in table:
+            raise SceneError(f"{path}.e", "no eccentricity: perigee_altitude and apogee_altitude set it", shown(table["e"]))
+        rp, ra = radius_m + h["perigee_altitude"], radius_m + h["apogee_altitude"]
+        if ra < rp:
+            raise SceneError(f"{path}.apogee_altitude", f"an apogee altitude >= the perigee altitude "
+                             f"({shown(table['perigee_altitude'])})", shown(table["apogee_altitude"]))  # fmt: skip
+        e = (ra - rp) / (ra + rp)
+        return 0.5 * (rp + ra), table["apogee_altitude"], e, e
+    e_raw = table.get("e", 0.0)
     e = _bounded(to_si(e_raw, DIMENSIONLESS, key=f"{path}.e"), f"{path}.e", DIMENSIONLESS, e_raw)
-    angles = {k: to_si(table[k], ANGLE, key=f"{path}.{k}") if k in table else 0.0 for k in _ELEMENT_KEYS[2:]}
+    key = given[0]
+    if key == "altitude":
+        return radius_m + h[key], table[key], e, e_raw
+    if key == "perigee_altitude":
+        if e == 1.0:
+            return math.nan, table[key], e, e_raw  # refused below as a parabola
+        return (radius_m + h[key]) / (1.0 - e), table[key], e, e_raw
+    if not 0.0 <= e < 1.0:
+        raise SceneError(f"{path}.e", "an eccentricity in [0, 1) with apogee_altitude (only ellipses have an apogee)",
+                         shown(e_raw))  # fmt: skip
+    return (radius_m + h[key]) / (1.0 + e), table[key], e, e_raw
+
+
+def _parse_elements(value: Any, path: str, radius_m: float | None = None) -> Elements:
+    table = _table(value, path, _ELEMENT_KEYS)
+    a, a_raw, e, e_raw = _orbit_size(table, path, radius_m)
+    angles = {k: to_si(table[k], ANGLE, key=f"{path}.{k}") if k in table else 0.0 for k in ("i", "raan", "argp", "nu")}
 
     if e < 0.0:
         raise SceneError(f"{path}.e", "an eccentricity >= 0", shown(e_raw))
@@ -73,9 +120,9 @@ def _parse_elements(value: Any, path: str) -> Elements:
             shown(e_raw),
         )
     if e < 1.0 and not a > 0.0:
-        raise SceneError(f"{path}.a", "a > 0 for an elliptic orbit (e < 1)", f"{shown(table['a'])} with e = {e!r}")
+        raise SceneError(f"{path}.a", "a > 0 for an elliptic orbit (e < 1)", f"{shown(a_raw)} with e = {e!r}")
     if e > 1.0 and not a < 0.0:
-        raise SceneError(f"{path}.a", "a < 0 for a hyperbolic orbit (e > 1)", f"{shown(table['a'])} with e = {e!r}")
+        raise SceneError(f"{path}.a", "a < 0 for a hyperbolic orbit (e > 1)", f"{shown(a_raw)} with e = {e!r}")
     # 180 deg converts to pi give or take an ulp; the tolerance keeps that legal.
     if not (-1e-12 <= angles["i"] <= math.pi + 1e-12):
         raise SceneError(f"{path}.i", "an inclination from 0 to 180 deg", shown(table["i"]))
@@ -89,8 +136,9 @@ def _parse_elements(value: Any, path: str) -> Elements:
     return Elements(a, e, angles["i"], angles["raan"], angles["argp"], angles["nu"])
 
 
-def _parse_state(table: Mapping[str, Any], path: str, *, fixed: bool = False):
-    """(position, velocity, elements) of a body or of [orbit]; all None when none is given."""
+def _parse_state(table: Mapping[str, Any], path: str, *, fixed: bool = False, radius_m: float | None = None):
+    """(position, velocity, elements) of a body or of [orbit]; all None when none is given
+    (``radius_m``: the central body's, for altitudes given in the elements)."""
     has_elements = "elements" in table
     has_position = "position" in table
     has_velocity = "velocity" in table
@@ -112,7 +160,7 @@ def _parse_state(table: Mapping[str, Any], path: str, *, fixed: bool = False):
             "both elements and " + ("position" if has_position else "velocity"),
         )
     if has_elements:
-        return None, None, _parse_elements(table["elements"], _join(path, "elements"))
+        return None, None, _parse_elements(table["elements"], _join(path, "elements"), radius_m)
     if has_position and not has_velocity:
         raise SceneError(_join(path, "velocity"), f"a velocity to go with position ({SPEED.describe()} x 3)", _NOTHING)
     if has_velocity and not has_position:
@@ -126,7 +174,7 @@ def _parse_state(table: Mapping[str, Any], path: str, *, fixed: bool = False):
     return None, None, None
 
 
-def _parse_bodies(value: Any, mu: float, origin_singular: list[str] = ()) -> tuple[Body, ...]:
+def _parse_bodies(value: Any, mu: float, origin_singular: list[str] = (), radius_m: float | None = None) -> tuple[Body, ...]:
     tables = _named_tables(value, "bodies", "bodies")
     if not tables:
         raise SceneError("bodies", "at least one body", "an empty table")
@@ -145,7 +193,7 @@ def _parse_bodies(value: Any, mu: float, origin_singular: list[str] = ()) -> tup
             mass = 0.0
         else:
             mass = _quantity(_required(table, "mass", path, MASS.describe()), f"{path}.mass", MASS, positive=True)
-        position, velocity, elements = _parse_state(table, path, fixed=fixed)
+        position, velocity, elements = _parse_state(table, path, fixed=fixed, radius_m=radius_m)
         rigid = _parse_rigid(table, path, fixed)
         body = Body(name, mass, fixed, position, velocity, elements, rigid)
         # The origin is the centre of the central body only for the effects singular there; a

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..model import topology
+from .keys import _NOTHING
 from .data import (
     EQUILIBRIUM,
     MAX_SANE_STRAIN,
@@ -200,3 +201,62 @@ def _check_orbits_duration(raw: Any, orbit: Orbit | None, bodies, mu: float) -> 
         _period_of_state(mu, *state)
     except ValueError:
         raise SceneError("duration", "a time: the reference orbit is not closed (e >= 1), so it has no period", repr(raw)) from None
+
+
+def _check_epoch(effects, epoch: str | None) -> None:
+    """Effects (or effect options) that need the scene's epoch, refused at load without one: the
+    registry says which (``EffectSpec.dated``, ``ParamSpec.dated``: forces/registry.py)."""
+    if epoch is not None:
+        return
+    from ..forces import EFFECTS
+
+    for use in effects:
+        spec = EFFECTS[use.name]
+        if spec.dated:
+            raise SceneError("epoch", f"an ISO date (TDB), e.g. '2026-01-01T00:00:00', for effect {use.name!r} "
+                             f"(its model is dated)", _NOTHING)  # fmt: skip
+        for pname, pspec in spec.params.items():
+            value = use.params_si.get(pname)
+            if pspec.dated and value in pspec.dated:
+                raise SceneError("epoch", f"an ISO date (TDB), e.g. '2026-01-01T00:00:00', for effects.{use.name}."
+                                 f"{pname} = {value!r} (its model is dated)", _NOTHING)  # fmt: skip
+
+
+def _check_above_surface(bodies, orbit: Orbit | None, central, singular: list[str]) -> None:
+    """Every initial state given at load (the [orbit]'s, each body's own) above the central body's
+    surface, when the scene has its gravity: an orbit inside the Earth is a mistake (typically a
+    semi-major axis written for an altitude), never a scene to run."""
+    if not singular:
+        return
+    mu, radius = central.mu_m3_s2, central.radius_m
+    states = []
+    with np.errstate(all="ignore"):  # a non-finite state is refused below (height NaN)
+        if orbit is not None and (orbit.position_m is not None or orbit.elements is not None):
+            states.append(("orbit", orbit.elements is not None, orbit.state(mu)[0]))
+        for b in bodies:
+            if b.has_state:
+                states.append((f"bodies.{b.name}", b.elements is not None, b.state(mu)[0]))
+    for path, by_elements, r in states:
+        height = float(np.linalg.norm(r)) - radius
+        if not height >= 0.0:
+            key = f"{path}.elements.a" if by_elements else f"{path}.position"
+            hint = ("for an altitude write elements.altitude (or perigee_altitude / apogee_altitude) instead of a"
+                    if by_elements else None)
+            raise SceneError(
+                key, f"an initial position above the surface of the central body {central.name!r} "
+                f"(radius {radius / 1e3:.6g} km)", f"a start {-height / 1e3:.6g} km below it", hint=hint,
+            )  # fmt: skip
+
+
+def _check_stop_altitude(stop, orbit: Orbit | None, bodies, central) -> None:
+    """stop.altitude below the altitude the run starts from (the reference orbit's initial
+    altitude; the run's own check on the laid-out root body stays in pipeline.prepare)."""
+    if stop.altitude_m is None:
+        return
+    state = _reference_state(orbit, bodies, central.mu_m3_s2)
+    if state is None:
+        return
+    start = float(np.linalg.norm(state[0])) - central.radius_m
+    if not stop.altitude_m < start:
+        raise SceneError("stop.altitude", f"an altitude below the start of the run ({start / 1e3:.6g} km above "
+                         f"the central body's radius): the run would stop at once", f"{stop.altitude_m / 1e3:.6g} km")  # fmt: skip

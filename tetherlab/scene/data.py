@@ -208,6 +208,20 @@ class Tether:
     to_point_m: Vector3 | None = None
 
 
+#: frames a spin axis may be written in
+SPIN_FRAMES = ("orbit", "inertial")
+
+
+@dataclass(frozen=True)
+class Spin:
+    """A rigid rotation of the point masses and tethers about the orbit reference at t = 0, on
+    top of ``motion`` (docs/scenes.md, ``[orbit] spin``)."""
+
+    rate_rad_s: float
+    axis: Vector3 = (0.0, 0.0, 1.0)  # unit vector; in the orbit frame: (radial, along-track, normal)
+    frame: str = "orbit"
+
+
 @dataclass(frozen=True)
 class Orbit:
     """Initial orbit of the reference point (the centre of mass, or a body)."""
@@ -217,6 +231,7 @@ class Orbit:
     position_m: Vector3 | None = None
     velocity_m_s: Vector3 | None = None
     motion: str = "corotating"
+    spin: Spin | None = None
 
     def state(self, mu_m3_s2: float) -> tuple[np.ndarray, np.ndarray] | None:
         if self.elements is not None:

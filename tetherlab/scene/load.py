@@ -13,7 +13,15 @@ from typing import Any
 from ..errors import SceneError
 from ..model import topology
 from .bodies import _parse_bodies
-from .checks import _check_forest, _check_layout, _check_orbits_duration, _check_run
+from .checks import (
+    _check_above_surface,
+    _check_epoch,
+    _check_forest,
+    _check_layout,
+    _check_orbits_duration,
+    _check_run,
+    _check_stop_altitude,
+)
 from .data import SINGULAR_AT_ORIGIN, OutputSpec, Scene
 from .keys import _reject_non_finite, _required, _string, _table
 from .orbit import _parse_orbit
@@ -85,21 +93,27 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     effects = _parse_effects(_required(top, "effects", "", "a table of effects, e.g. central_gravity = {}"))
     origin_singular = [e.name for e in effects if e.name in SINGULAR_AT_ORIGIN]
     bodies = _parse_bodies(
-        _required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu, origin_singular
+        _required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu, origin_singular,
+        radius_m=central.radius_m,
     )
     effects = _expand_per_body(effects, bodies)
     tethers = _parse_tethers(top.get("tethers", {}), bodies)
     graph = topology.build(bodies, tethers)
     _check_forest(bodies, tethers, graph)
-    orbit = _parse_orbit(top["orbit"], bodies, mu) if "orbit" in top else None
+    orbit = _parse_orbit(top["orbit"], bodies, mu, central.radius_m) if "orbit" in top else None
+    _check_above_surface(bodies, orbit, central, origin_singular)
+    _check_epoch(effects, epoch)
     graph = graph.with_layout(bodies, tethers, orbit)
     tethers = _check_layout(bodies, tethers, orbit, mu, graph)
 
-    duration_s, duration_orbits = _parse_duration(_required(top, "duration", "", "a time (e.g. '6000 s') or 'N orbits'"))
+    duration_raw = _required(top, "duration", "", "a time (e.g. '6000 s'), 'N orbits' or 'N spins'")
+    duration_s, duration_orbits = _parse_duration(_spins_to_seconds(duration_raw, orbit))
     if duration_orbits is not None:
         _check_orbits_duration(top["duration"], orbit, bodies, mu)
     integrator = _parse_integrator(top.get("integrator", {}))
     stop = _parse_stop(top["stop"], central) if "stop" in top else None
+    if stop is not None:
+        _check_stop_altitude(stop, orbit, bodies, central)
     scene = Scene(
         name=name,
         duration_s=duration_s,
@@ -121,3 +135,22 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
     scene = dataclasses.replace(scene, output=output)
     _check_run(scene)
     return scene
+
+
+_SPINS_RE = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*spins?\s*$")
+
+
+def _spins_to_seconds(raw: Any, orbit) -> Any:
+    """``duration = "N spins"``: N turns of ``[orbit] spin`` (2 pi / |rate| each), as seconds."""
+    import math
+
+    match = _SPINS_RE.match(raw) if isinstance(raw, str) else None
+    if match is None:
+        return raw
+    spin = getattr(orbit, "spin", None)
+    if spin is None:
+        raise SceneError("duration", "a time or 'N orbits': 'N spins' needs [orbit] spin to say which spin", repr(raw))
+    n = float(match.group(1))
+    if not (math.isfinite(n) and n > 0.0):
+        raise SceneError("duration", "a number of spins > 0", repr(raw))
+    return f"{n * 2.0 * math.pi / abs(spin.rate_rad_s)!r} s"

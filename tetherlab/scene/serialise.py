@@ -177,6 +177,9 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
     if scene.orbit is not None:
         o = scene.orbit
         out["orbit"] = {"reference": o.reference, **_state_dict(o.position_m, o.velocity_m_s, o.elements), "motion": o.motion}
+        if o.spin is not None:
+            out["orbit"]["spin"] = {"rate": format_si(o.spin.rate_rad_s, ANGULAR_RATE), "axis": list(o.spin.axis),
+                                    "frame": o.spin.frame}  # fmt: skip
     ig = scene.integrator
     integrator: dict[str, Any] = {"method": ig.method, "rtol": float(ig.rtol), "atol": float(ig.atol)}
     if ig.max_step_s is not None:

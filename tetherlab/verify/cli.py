@@ -114,6 +114,7 @@ def main(argv=None) -> int:
         figure_section=FIGURE_SECTION, studies=study_sections, controls=(control_rows, cells, by_defect, by_gate),
         toothless=TOOTHLESS, retired=RETIRED, gate_section=gate_section, wall_s=wall, commit=git_commit(),
         footer=footer(), matrix_md=matrix_md(cells, gates, by_defect, by_gate) if cells else "",
+        descriptions={sid: fn.__doc__ for sid, _title, fn in CHECKS},
     )  # fmt: skip
     md = doc.markdown()
     (out / "index.md").write_text(md)

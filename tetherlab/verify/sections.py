@@ -37,7 +37,11 @@ def gate_section(gid: str) -> str:
         if gid in _GATES_OF.get(sid, ()):
             return sid
     for prefix, sid in (("catenary", "study-catenary"), ("stiefel_", "study-stiefel_table"),
-                        ("deorbit", "study-deorbit"), ("hard_cases", "study-hard_cases"), ("mutation", "controls")):
+                        ("deorbit", "study-deorbit"), ("hard_cases", "study-hard_cases"), ("mutation", "controls"),
+                        # the rigid-body oracles (studies/rigid_bodies.py, docs/rigid-oracles.md)
+                        ("hub_spoke", "study-rigid_bodies"), ("torque_free", "study-rigid_bodies"),
+                        ("gg_libration", "study-rigid_bodies"), ("wheel", "study-rigid_bodies"),
+                        ("untethered_bodies", "study-rigid_bodies"), ("conservation_tree", "study-rigid_bodies")):
         if gid.startswith(prefix):
             return sid
     return "gates"

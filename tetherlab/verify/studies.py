@@ -153,8 +153,20 @@ SWEEPING_STUDIES = ("convergence", "workprecision", "hard_cases")
 
 
 def _summary_md(name: str, sdir: Path) -> str:
-    """A section for a study that writes JSON/CSV and figures but no Markdown of its own."""
+    """A section for a study that writes JSON/CSV and figures but no Markdown of its own: what it
+    checks, against what (the study's own docstring, its first paragraphs up to the command line),
+    then its tables and figures."""
     lines = []
+    doc = (load_study(name).__doc__ or "").strip()
+    intro = []
+    for para in doc.split("\n\n"):
+        if para.lstrip().startswith(("PYTHONPATH", "python ", "Writes into", "``--")):
+            continue  # how to run the script, not what it checks
+        text = " ".join(para.split())
+        text = re.sub(r":[a-z]+:`~?([^`]+)`", r"`\1`", text).replace("``", "`")  # reST -> Markdown
+        intro.append(text)
+    if intro:
+        lines += ["**What this study checks, against what:** " + intro[0], ""] + [p + "\n" for p in intro[1:]]
     for csv in sorted(sdir.glob("*.csv")):
         import pandas as pd
 
