@@ -23,8 +23,8 @@ def _run(args) -> int:
     progress = None if not args.quiet else False
     try:
         if args.resume:
-            if args.scene or args.out or args.method:
-                print("tetherlab: --resume DIR continues the run stored in DIR: give no scene, --out or --method",
+            if args.scene or args.out or args.method or args.from_run:
+                print("tetherlab: --resume DIR continues the run stored in DIR: give no scene, --out, --method or --from",
                       file=sys.stderr)  # fmt: skip
                 return 2
             out = args.resume
@@ -37,6 +37,9 @@ def _run(args) -> int:
             scene = load_scene(args.scene)
             if args.method:
                 scene = scene.replace(**{"integrator.method": args.method})
+            if args.from_run:
+                # the scene's inputs from the final state and time of the finished run in DIR
+                scene = scene.replace(continue_from=args.from_run)
             record = run_to_dir(scene, out, progress=progress, checkpoint_s=args.checkpoint_every,
                                 part_rows=args.part_rows)  # fmt: skip
     except (SceneError, FileNotFoundError, RunDirError) as exc:
@@ -78,6 +81,9 @@ def main(argv=None) -> int:
     r.add_argument("scene", nargs="?", help="scene file (TOML)")
     r.add_argument("--out", help="output directory (Parquet datasets timeseries/ and diagnostics/, run.json)")
     r.add_argument("--resume", metavar="DIR", help="continue the interrupted run stored in DIR")
+    r.add_argument("--from", dest="from_run", metavar="DIR",
+                   help="start from the final state and time of the finished run in DIR (a mission in phases; "
+                        "sets the scene's continue_from)")
     r.add_argument("--method", help="override the scene's integrator method")
     r.add_argument("--quiet", action="store_true", help="no progress bar, no summary")
     r.add_argument("--checkpoint-every", type=float, default=5.0, metavar="SECONDS",

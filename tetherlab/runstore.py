@@ -331,7 +331,7 @@ def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
                 "t": float(z["t"]), "h": float(z["h"]), "done": int(z["done"]), "budget": int(z["budget"]),
                 "y": z["y"].copy(), "stats": z["stats"].copy(), "ev": z["ev"].copy(),
                 "ws": [z[f"ws{i}"].copy() for i in range(int(z["n_ws"]))], "resume": bool(z["resume"]),
-                "events": [tuple(e) for e in z["events"].tolist()],
+                "events": [tuple(e) for e in z["events"].tolist()], "sides": z["sides"].tolist(),
                 "wall_s": float(z["wall_s"]), "n_chunks": int(z["n_chunks"]),
                 # the segment loop's state (pipeline.run_segments) and the driver's rows in it
                 "seg_done": int(z["seg_done"]),
@@ -475,6 +475,7 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
             np.savez(
                 tmp, t=state["t"], h=state["h"], done=done, budget=state["budget"], y=state["y"],
                 stats=state["stats"], ev=state["ev"], resume=state["resume"], events=ev, p=p,
+                sides=np.asarray(state["sides"], float),
                 n_ws=len(state["ws"]), wall_s=wall_before + time.perf_counter() - t_wall,
                 n_chunks=chunks_before, seg_done=state["done"], seg_k=loop["k"], seg_t_a=loop["t_a"],
                 seg_y_in=np.asarray(loop["y_in"], float), seg_k_out=loop["k_out"], seg_budget=loop["budget"],
