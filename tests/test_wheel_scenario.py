@@ -278,3 +278,26 @@ def test_rotational_angular_momentum_columns():
     # alone at rest at the origin, the body's own angular momentum is the total (no m r x v)
     H = dg[[f"angmom_{a}_kg_m2_s" for a in "xyz"]].to_numpy()
     assert np.max(np.abs(H - L)) <= 1e-12
+
+
+def test_controller_torque_limit_events_agree_with_the_applied_torque():
+    """Under the PD controller the command depends on the whole state: the events (located on
+    the dense output, the branch held between them) must bracket exactly the output rows where
+    the applied torque sits at its limit (the diagnostics evaluate the limit afresh at each row)."""
+    from tetherlab.scene import load_scene
+
+    from .helpers import SCENES
+
+    scene = load_scene(SCENES / "rigid-wheels-control.toml").replace(
+        **{"bodies.sat.wheels.wy.max_torque": "0.02 N m", "duration": "200 s", "output.step": "0.5 s"})  # fmt: skip
+    r = simulate(scene, progress=False)
+    ev = r.events[r.events["event"] == "wheel.sat.wy.max_torque"]
+    assert len(ev) >= 4
+    tq = r.diagnostics["sat.wy.torque_N_m"].to_numpy()
+    t = r.diagnostics["t_s"].to_numpy()
+    at_limit = np.abs(tq) == 0.02
+    inside = np.full(t.size, bool(at_limit[0]))  # saturated from the start or not
+    for te, side in zip(ev["t_s"], ev["side"]):
+        inside[t > te] = side == "entered"
+    near = np.min(np.abs(t[:, None] - ev["t_s"].to_numpy()[None, :]), axis=1) < 1e-6
+    assert np.array_equal(at_limit[~near], inside[~near])
