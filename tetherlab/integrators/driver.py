@@ -281,7 +281,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         progress, fixed_step,
     )  # fmt: skip
     ne, terminal = _check_events(method, event, n_events, terminal)
-    bks = _check_breaks(breaks, t0, tt, at_interval)
+    bks = _check_breaks(breaks, t0, tt, at_interval, at_sides)
     if method in SCIPY_METHODS:
         from .scipy_backend import integrate_scipy
 
@@ -517,10 +517,12 @@ def _loop_state(t, y, h, done, budget, stats, ev, ws, resume, events, sides=()) 
     }  # fmt: skip
 
 
-def _check_breaks(breaks, t0, tt, at_interval) -> np.ndarray:
-    """The breakpoints strictly inside (t0, last output time), sorted, each once."""
-    if at_interval is not None and not callable(at_interval):
-        raise ValueError(f"at_interval: expected a callable or None; got {type(at_interval).__name__}")
+def _check_breaks(breaks, t0, tt, at_interval, at_sides=None) -> np.ndarray:
+    """The breakpoints strictly inside (t0, last output time), sorted, each once (and the two
+    callbacks checked)."""
+    for name, f in (("at_interval", at_interval), ("at_sides", at_sides)):
+        if f is not None and not callable(f):
+            raise ValueError(f"{name}: expected a callable or None; got {type(f).__name__}")
     b = _as_vector("breaks", breaks).ravel()
     if not np.all(np.isfinite(b)):
         raise ValueError("breaks: expected finite times; got NaN or Inf")
