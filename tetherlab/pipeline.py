@@ -359,7 +359,7 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     res, p = integrate_prepared(prep, p, bar.update)
     bar.close()
     stats, message = run_outcome(prep, res, p, time.perf_counter() - t_wall)
-    d = diag.compute(prep.model, res.t, res.y)
+    d = diag.compute(prep.model, res.t, res.y, branch_spans(prep, res.events))
     result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)
     if res.status != 0 and raise_on_failure:
         raise SimulationError(message, result)
@@ -402,9 +402,8 @@ def _interval_setter(pe: np.ndarray):
     return at_interval
 
 
-def _sides_setter(prep: Prepared, pe: np.ndarray):
-    """The driver's ``at_sides``: each wheel limit's branch locked to its event component's side
-    (bodies/wheels.py::motor_torque; negative side = the limit acts); None without wheel events."""
+def _wheel_targets(prep: Prepared) -> list:
+    """(event component, wheel index, lock field) of every wheel-limit event component."""
     targets = []
     whl = ParamView(prep.model.p).wheel_state_index  # wheel j's state index is whl + j
     for k, name in enumerate(prep.event_names):
@@ -413,6 +412,13 @@ def _sides_setter(prep: Prepared, pe: np.ndarray):
             b = next(i for i, bs in enumerate(prep.model.bodies) if bs.name == body)
             j = prep.model.wheel_index[(b, wheel)] - whl
             targets.append((k, j, "torque_limit_lock" if limit == "max_torque" else "speed_limit_lock"))
+    return targets
+
+
+def _sides_setter(prep: Prepared, pe: np.ndarray):
+    """The driver's ``at_sides``: each wheel limit's branch locked to its event component's side
+    (bodies/wheels.py::motor_torque; negative side = the limit acts); None without wheel events."""
+    targets = _wheel_targets(prep)
     if not targets:
         return None
     view = ParamView(pe)
@@ -422,6 +428,28 @@ def _sides_setter(prep: Prepared, pe: np.ndarray):
             setattr(view.wheel(j), field, 1.0 if sides[k] < 0.0 else 0.0)
 
     return at_sides
+
+
+def branch_spans(prep: Prepared, events) -> list | None:
+    """The wheel limits' branches the run held, span by span, for the diagnostics
+    (diagnostics.compute): the sides at the start, as the driver finds them, then each located
+    event (t, component, side) in order; None without wheel-limit events."""
+    from .integrators.driver import event_values_at
+
+    targets = _wheel_targets(prep)
+    if not targets:
+        return None
+    g = event_values_at(system_events, prep.t0_s, prep.y0, prep.model.fresh_params(), len(prep.event_names))
+    sides = np.where(g < 0.0, -1.0, 1.0)
+
+    def locks():
+        return [(j, field, 1.0 if sides[k] < 0.0 else 0.0) for k, j, field in targets]
+
+    spans = [(-math.inf, locks())]
+    for t, comp, side in events:
+        sides[int(comp)] = float(side)
+        spans.append((float(t), locks()))
+    return spans
 
 
 def integrate_prepared(prep: Prepared, p: np.ndarray, progress=None):

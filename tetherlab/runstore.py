@@ -147,6 +147,8 @@ class _Store:
         self.part_rows = int(part_rows)
         self.m = int(prep.t_out.size)
         self.n = int(prep.model.state.size)
+        # the located events so far (the wheel limits' branches the diagnostics evaluate with)
+        self.events: list = []
 
     # -- derived tables ------------------------------------------------------------------------
     def write_part(self, k: int, t: np.ndarray, Y: np.ndarray, p: np.ndarray, first: np.ndarray | None) -> None:
@@ -162,7 +164,9 @@ class _Store:
             t = np.concatenate([[self.prep.t_out[0]], t])
             Y = np.concatenate([first[None, :], Y])
         Y = np.asarray(Y)
-        d = diag.compute(self.prep.model, t, Y)
+        from .pipeline import branch_spans
+
+        d = diag.compute(self.prep.model, t, Y, branch_spans(self.prep, self.events))
         r = Result.from_run(self.scene, self.prep, t, Y, d, {}, 0, "", p)
         for name, frame in zip(TABLES, (r.timeseries, r.diagnostics)):
             if first is not None:
@@ -454,6 +458,7 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
     p = plan.pe  # the block the kernels write (counters, failure records): the one checkpointed
     have = store.parts_present()
     if restart is not None:
+        store.events = list(restart["loop"]["events"]) + list(restart["events"])
         store.write_full_parts(states, restart["done"], p, have)  # any a kill left unwritten
     wall_before = restart["wall_s"] if restart else 0.0
     chunks_before = restart["n_chunks"] if restart else 0
@@ -493,6 +498,7 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
     with _Signals() as sig:
 
         def on_chunk(state, done, loop, y_out):
+            store.events = list(loop["events"]) + list(state["events"])
             store.write_full_parts(states, done, p, have)
             if sig.hit is not None or time.perf_counter() - last_ck[0] >= checkpoint_s:
                 save_checkpoint(state, done, loop, y_out)
@@ -553,6 +559,7 @@ def _finish(store: _Store, record: dict, res, p, states, wall_s: float, chunks_b
         states.flush()
     B = store.part_rows
     have = store.parts_present()
+    store.events = list(res.events)
     for k in range(math.ceil(rows / B)):
         a, b = k * B, min((k + 1) * B, rows)
         if k in have and b - a == B:

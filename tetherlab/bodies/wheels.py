@@ -135,9 +135,17 @@ def motor_torque(p, wb, t, h, wx, wy, wz, ux, uy, uz):
 
 @njit(cache=True)
 def limit_events(p, wb, cmd, speed):
-    """The two switching functions of a wheel's limits, negative while the limit acts: the torque
-    limit max_torque - |command| (1.0 without one), and the speed cut-off, negative while
-    |speed| > max_speed with a torque that would spin the wheel further (1.0 without one)."""
+    """The two switching functions of a wheel's limits, negative while the limit acts.
+
+    Torque limit: max_torque - |command| (1.0 without one).  Speed cut-off (1.0 without one):
+    while it does not act, min(max(max_speed - speed, -tau), max(max_speed + speed, tau)),
+    negative once |speed| passes max_speed with a torque tau (after its limit) that would spin
+    the wheel further; while it acts (branch locked on, WT_LOCKW = 1), -tau sign(speed), which
+    stays negative until the motor's command turns round.  The cut wheel keeps its momentum, so
+    its speed relative to the body follows the body's rate about its axis and may dip below
+    max_speed: releasing the cut there (and cutting again as the motor pushes it back over) would
+    be a sliding mode, an event at every ulp of the body's motion, so the cut holds until the
+    command reverses."""
     g_t = 1.0
     g_w = 1.0
     maxt = p[wb + WT_MAXT]
@@ -147,7 +155,10 @@ def limit_events(p, wb, cmd, speed):
         tau = min(maxt, max(-maxt, cmd))
     maxw = p[wb + WT_MAXW]
     if maxw > 0.0:
-        g_w = min(max(maxw - speed, -tau), max(maxw + speed, tau))
+        if p[wb + WT_LOCKW] > 0.0:
+            g_w = -tau if speed >= 0.0 else tau
+        else:
+            g_w = min(max(maxw - speed, -tau), max(maxw + speed, tau))
     return g_t, g_w
 
 

@@ -344,7 +344,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         if at_interval is not None:
             ib0 = int(np.searchsorted(bks, t, side="right"))
             at_interval(float(bks[ib0]) if ib0 < bks.size else float(tt[-1]))
-        sides = np.where(_event_side_values(event, t, y, p, ne) < 0.0, -1.0, 1.0)
+        sides = np.where(event_values_at(event, t, y, p, ne) < 0.0, -1.0, 1.0)
         at_sides(sides.copy())
     wall0 = time.perf_counter()
     while True:
@@ -377,10 +377,10 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
             # changed are reported at its time)
             nxt = float(bks[ib + 1]) if ib + 1 < bks.size else float(tt[-1])
             if ne > 0:
-                before = _event_side_values(event, t, y, p, ne)
+                before = event_values_at(event, t, y, p, ne)
                 if at_interval is not None:
                     at_interval(nxt)
-                after = _event_side_values(event, t, y, p, ne)
+                after = event_values_at(event, t, y, p, ne)
                 for comp in range(ne):
                     if (before[comp] < 0.0) != (after[comp] < 0.0):
                         events.append((float(t), comp, 1 if after[comp] >= 0.0 else -1))
@@ -416,7 +416,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
             if at_sides is not None:
                 # every other component from the state: one that changed side twice inside a
                 # step (not seen) must not keep a stale branch; such a change is reported here
-                g = _event_side_values(event, t, y, p, ne)
+                g = event_values_at(event, t, y, p, ne)
                 for c in range(ne):
                     s_c = float(new_side) if c == comp else (-1.0 if g[c] < 0.0 else 1.0)
                     if c != comp and s_c != sides[c]:
@@ -530,8 +530,9 @@ def _check_breaks(breaks, t0, tt, at_interval, at_sides=None) -> np.ndarray:
     return np.ascontiguousarray(b[(b > t0) & (b < tt[-1])])
 
 
-def _event_side_values(event, t, y, p, ne) -> np.ndarray:
-    """g(t, y) of the event function, called from Python (at a breakpoint, once per side)."""
+def event_values_at(event, t, y, p, ne) -> np.ndarray:
+    """g(t, y) of the event function, called from Python (at the start, at a located event, at a
+    breakpoint once per side)."""
     import ctypes
 
     g = np.zeros(ne)
