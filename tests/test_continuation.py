@@ -103,3 +103,14 @@ def test_other_formulations_continue(tmp_path, form):
     # the error norm; taken 1e-3 m for the end mass (measured: 5e-8 to 1.5e-7 m over one orbit).
     for c in ("mf.x_m", "mf.y_m", "mf.z_m"):
         assert abs(a[c] - b[c]) <= 1e-3, c
+
+
+def test_cli_refuses_to_continue_into_its_own_directory(tmp_path, capsys):
+    from tetherlab.cli import main
+
+    p1 = tmp_path / "p1.toml"
+    p1.write_text(USER_SCENE.replace('duration = "10 s"', 'duration = "5 s"'))
+    assert main(["run", str(p1), "--out", str(tmp_path / "r1"), "--quiet"]) == 0
+    assert main(["run", str(p1), "--out", str(tmp_path / "r1"), "--from", str(tmp_path / "r1"), "--quiet"]) == 2
+    assert "overwrite the run it starts from" in capsys.readouterr().err
+    assert json.loads((tmp_path / "r1" / "run.json").read_text())["state"] == "complete"

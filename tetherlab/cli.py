@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 
 def _run(args) -> int:
@@ -38,6 +39,10 @@ def _run(args) -> int:
             if args.method:
                 scene = scene.replace(**{"integrator.method": args.method})
             if args.from_run:
+                if Path(args.from_run).resolve() == Path(args.out).resolve():
+                    print(f"tetherlab: --from {args.from_run} and --out {args.out} are one directory: the new phase "
+                          "would overwrite the run it starts from; give it a directory of its own", file=sys.stderr)
+                    return 2
                 # the scene's inputs from the final state and time of the finished run in DIR
                 scene = scene.replace(continue_from=args.from_run)
             record = run_to_dir(scene, out, progress=progress, checkpoint_s=args.checkpoint_every,
