@@ -27,7 +27,7 @@ from tetherlab.integrators import driver
 from tetherlab.pipeline import SimulationError, simulate
 from tetherlab.result import Result
 from tetherlab.runstore import CHECKPOINT, Interrupted, RunDirError, resume_dir, run_to_dir
-from tetherlab.scene import load_scene
+from tetherlab.scene import Scene, load_scene
 
 from .helpers import ROOT, SCENES
 
@@ -110,10 +110,10 @@ def _slack_scene():
 @pytest.mark.parametrize(
     "case, signum",
     [("dop853", signal.SIGINT), ("dop853", signal.SIGTERM), ("vern9", signal.SIGINT), ("radau5", signal.SIGINT),
-     ("slack", signal.SIGINT)],
+     ("slack", signal.SIGINT), ("wheels", signal.SIGINT)],
 )  # fmt: skip
 def test_interrupted_run_resumes_to_the_same_numbers(tmp_path, monkeypatch, small_chunks, case, signum):
-    scene = _slack_scene() if case == "slack" else _scene(**{"integrator.method": case})
+    scene = {"slack": _slack_scene, "wheels": _wheel_limits_scene}.get(case, lambda: _scene(**{"integrator.method": case}))()
     ref = tmp_path / "ref"
     run_to_dir(scene, ref, progress=False, part_rows=PART_ROWS)
     out = tmp_path / "o"
@@ -142,6 +142,19 @@ def test_interrupted_run_resumes_to_the_same_numbers(tmp_path, monkeypatch, smal
         assert rec["stats"][k] == ref_stats[k], k
     if case == "slack":
         assert len(rec["stats"]["events"]) > 50
+    if case == "wheels":
+        assert len(rec["stats"]["events"]) == 5
+
+
+def _wheel_limits_scene():
+    # a wheel's torque and speed limits entered and left (5 located events, each locking a branch:
+    # the sides a checkpoint must carry) and a torque table's corner (a breakpoint), 301 outputs
+    from .test_wheel_scenario import _limits_dict
+
+    d = _limits_dict()
+    d["integrator"]["max_step"] = "0.1 s"
+    d["output"] = {"count": 301}
+    return Scene.from_dict(d)
 
 
 # The child process: kernel calls of 16 steps, each slowed by 20 ms, so the run lasts a few

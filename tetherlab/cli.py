@@ -134,8 +134,8 @@ def _run(args) -> int:
         if args.method:
             _check_method(args.method)
         if args.resume:
-            if args.scene or args.out or args.method:
-                raise CommandLineError("--resume DIR continues the run stored in DIR: give no scene, --out or --method")
+            if args.scene or args.out or args.method or args.from_run:
+                raise CommandLineError("--resume DIR continues the run stored in DIR: give no scene, --out, --method or --from")
             out = Path(args.resume)
             _jit.announce_compilation()
             record = resume_dir(out, progress=progress, checkpoint_s=args.checkpoint_every)
@@ -146,6 +146,12 @@ def _run(args) -> int:
             if args.method:
                 scene = scene.replace(**{"integrator.method": args.method})
             out = Path(args.out) if args.out else _default_out(scene)
+            if args.from_run:
+                if Path(args.from_run).resolve() == out.resolve():
+                    raise CommandLineError(f"--from {args.from_run} and --out {out} are one directory: the new phase "
+                                           "would overwrite the run it starts from; give it a directory of its own")
+                # the scene's inputs from the final state and time of the finished run in DIR
+                scene = scene.replace(continue_from=args.from_run)
             _jit.announce_compilation()
             record = run_to_dir(scene, out, progress=progress, checkpoint_s=args.checkpoint_every,
                                 part_rows=args.part_rows)  # fmt: skip
@@ -336,6 +342,9 @@ def parser() -> argparse.ArgumentParser:
     r.add_argument("--out", help="output directory (Parquet datasets timeseries/ and diagnostics/, run.json); "
                    "default runs/NAME, NAME the scene's name (runs/NAME-2 ... when taken)")  # fmt: skip
     r.add_argument("--resume", metavar="DIR", help="continue the interrupted run stored in DIR")
+    r.add_argument("--from", dest="from_run", metavar="DIR",
+                   help="start from the final state and time of the finished run in DIR (a mission in phases; "
+                        "sets the scene's continue_from)")
     r.add_argument("--method", help="override the scene's integrator method (dop853, vern9, radau5, abm, "
                    "scipy:DOP853, scipy:Radau, scipy:LSODA, scipy:BDF)")  # fmt: skip
     r.add_argument("--quiet", action="store_true", help="no progress bar, no summary")

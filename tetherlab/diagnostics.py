@@ -156,8 +156,15 @@ def evaluate_rows(ts, Y, p, glob, rods, joints, acc, datt, ctrl, wheels):
     return -1
 
 
-def compute(model, ts: np.ndarray, Y: np.ndarray) -> dict:
-    """Diagnostics for every row of Y (outputs of a run).  Returns numpy arrays in a dict."""
+def compute(model, ts: np.ndarray, Y: np.ndarray, spans=None) -> dict:
+    """Diagnostics for every row of Y (outputs of a run).  Returns numpy arrays in a dict.
+
+    ``spans`` (pipeline.branch_spans): the wheel limits' branches the run held between its located
+    events, [(t_from, [(wheel, field, value), ...]), ...]; each row is evaluated with the branches
+    of the last span starting before it, so the diagnostics show the torques that were integrated
+    (None: each limit decided at each row)."""
+    from .model.params import ParamView
+
     p = model.fresh_params()
     nrows = Y.shape[0]
     nr = model.n_rods
@@ -172,11 +179,21 @@ def compute(model, ts: np.ndarray, Y: np.ndarray) -> dict:
     lay = model.state
     acc = np.zeros(lay.n_qt)
     datt = np.zeros(lay.n_attitude + lay.n_wheels)
-    if nrows:
-        evaluate_rows(
-            np.ascontiguousarray(ts, float), np.ascontiguousarray(Y, float), p, glob, rods, joints, acc, datt,
-            ctrl, wheels,
-        )
+    ts = np.ascontiguousarray(ts, float)
+    Y = np.ascontiguousarray(Y, float)
+    if nrows and spans is None:
+        evaluate_rows(ts, Y, p, glob, rods, joints, acc, datt, ctrl, wheels)
+    elif nrows:
+        view = ParamView(p)
+        for i, (t_from, locks) in enumerate(spans):
+            lo = 0 if i == 0 else int(np.searchsorted(ts, t_from, side="right"))
+            hi = nrows if i + 1 == len(spans) else int(np.searchsorted(ts, spans[i + 1][0], side="right"))
+            if hi <= lo:
+                continue
+            for j, field, value in locks:
+                setattr(view.wheel(j), field, value)
+            evaluate_rows(ts[lo:hi], Y[lo:hi], p, glob[lo:hi], rods[lo:hi], joints[lo:hi], acc, datt, ctrl[lo:hi],
+                          wheels[lo:hi])  # fmt: skip
     return {"global": glob, "rods": rods, "joints": joints, "control": ctrl, "wheels": wheels}
 
 

@@ -65,6 +65,9 @@ class Prepared:
     formulation: str = "cowell"  # "cowell", "cowell-orbit", "dromo-sigma" (point mass) or "dromo-time"
     mu_m3_s2: float = 0.0
     time_element: str = "none"  # DROMO sigma form: "none" (tau) or "linear" (scene.IntegratorSpec)
+    # every corner and jump of the time tables: the steps land on them (docs/integrators.md 14)
+    breaks_s: tuple = ()
+    t0_s: float = 0.0  # the start time: 0, or the end of the run the scene continues (continue_from)
 
 
 def _body_spec(body) -> BodySpec:
@@ -97,6 +100,13 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
     from .resources import check_scene
 
     check_scene(scene, outputs_in_memory=outputs_in_memory, out_dir=out_dir)
+    # a scene continuing a finished run starts from its final state and time (continuation.py)
+    start = None
+    if scene.continue_from is not None:
+        from .continuation import final_state
+
+        start = final_state(scene.continue_from)
+    t0 = start.t_s if start is not None else 0.0
     mu = scene.central_body.mu_m3_s2
     central = {"mu_m3_s2": mu, "radius_m": scene.central_body.radius_m}
     effects = [(effect_spec(e.name), e.params_si) for e in scene.effects]
@@ -139,7 +149,7 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
         root_fixed=bool(getattr(root, "fixed", False)),
         root_name=root_name,
         epoch=scene.epoch,
-        duration_s=_duration_hint(scene),
+        duration_s=None if _duration_hint(scene) is None else t0 + _duration_hint(scene),
         bodies=kernel_bodies,
         graph=graph,
     )
@@ -163,6 +173,11 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
     holding = None
     if any(t.initial is not None and t.initial.shape == "equilibrium" for t in tethers):
         y0, holding = initial.static_start(scene, root, tethers, specs, effects, central, nq, y0)
+    if start is not None:
+        from .continuation import check_layout
+
+        check_layout(start, model.state)
+        y0 = start.y.copy()
     stop_radius = 0.0
     if scene.stop is not None and scene.stop.altitude_m is not None:
         stop_radius = scene.central_body.radius_m + scene.stop.altitude_m
@@ -201,9 +216,24 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
             )
         duration = scene.duration_orbits * period
     t_out = _output_times(scene.output, duration)
+    if t0 != 0.0:
+        t_out = t0 + t_out  # duration and output times count from the continued run's end
     h_max = scene.integrator.max_step_s or 0.0
     # events are located in time: with DROMO they run the time form (docs/dromo.md section 10)
     formulation = _formulation(scene, model, tethers, y0, bool(event_names))
+    # The wheels' limits are located events with Cowell and a native method (the other
+    # formulations and scipy apply them unlocated: docs/integrators.md section 14)
+    if formulation == "cowell" and not scene.integrator.method.startswith("scipy:") and any(
+        w.max_torque_N_m > 0.0 or w.max_speed_rad_s > 0.0
+        for b in model.bodies if getattr(b, "rigid", None) is not None for w in b.rigid.wheels
+    ):  # fmt: skip
+        ParamView(model.p).wheel_limit_events = 1
+        event_names, event_terminal = event_components(model, stop_radius, wheel_limits=True)
+    if start is not None and formulation == "dromo-sigma":
+        raise SceneError(
+            "continue_from", "a formulation integrated in time: DROMO's sigma form (a single body without events) "
+            "keeps its own clock from t = 0 (set integrator.formulation = 'cowell')", "formulation 'dromo'",
+        )  # fmt: skip
     if scene.integrator.method == "abm" and formulation != "dromo-sigma":
         raise SceneError(
             "integrator.method", "'abm' only with formulation 'dromo' on a single body without events (the DROMO "
@@ -234,6 +264,8 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
         formulation=formulation,
         mu_m3_s2=mu,
         time_element=scene.integrator.time_element,
+        breaks_s=tuple(model.breakpoints_s().tolist()),
+        t0_s=t0,
     )
 
 
@@ -335,7 +367,7 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     res, p = integrate_prepared(prep, p, bar.update)
     bar.close()
     stats, message = run_outcome(prep, res, p, time.perf_counter() - t_wall)
-    d = diag.compute(prep.model, res.t, res.y)
+    d = diag.compute(prep.model, res.t, res.y, branch_spans(prep, res.events))
     result = Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, message, p)
     from .regime import check as regime_check
 
@@ -352,16 +384,83 @@ def run_outcome(prep: Prepared, res, p: np.ndarray, total_wall_s: float) -> tupl
     stats["formulation"] = prep.formulation
     if prep.formulation == "dromo-sigma":
         stats["time_element"] = prep.time_element  # what the sigma form carried as its time
-    stats["events"] = [
-        {"t_s": float(te), "event": prep.event_names[k], "side": "taut" if side > 0 else "slack"}
-        if prep.event_names[k].startswith("slack.") else
-        {"t_s": float(te), "event": prep.event_names[k]}
-        for te, k, side in res.events
-    ]  # fmt: skip
+    stats["events"] = [event_record(prep.event_names[k], te, side) for te, k, side in res.events]
     stopped = res.stopped_by
     stats["stopped_by"] = None if stopped is None else prep.event_names[stopped]
     message = res.message if res.status == 0 else failure_message(p, prep.model, res.status, res.t_end, res.message)
     return stats, message
+
+
+def event_record(name: str, t_s: float, side: int) -> dict:
+    """One located event as the run's statistics list it: its time, component and what happened
+    (a rod gone slack or taut; a wheel limit entered, when the limit starts to act, or left)."""
+    rec = {"t_s": float(t_s), "event": name}
+    if name.startswith("slack."):
+        rec["side"] = "taut" if side > 0 else "slack"
+    elif name.startswith("wheel."):
+        rec["side"] = "left" if side > 0 else "entered"
+    return rec
+
+
+def _interval_setter(pe: np.ndarray):
+    """The driver's ``at_interval``: the end of the smooth interval being integrated into the
+    block, where the time tables take their left limit (bodies/wheels.py::table_value)."""
+    view = ParamView(pe)
+
+    def at_interval(t_b: float) -> None:
+        view.interval_end_s = t_b
+
+    return at_interval
+
+
+def _wheel_targets(prep: Prepared) -> list:
+    """(event component, wheel index, lock field) of every wheel-limit event component."""
+    targets = []
+    whl = ParamView(prep.model.p).wheel_state_index  # wheel j's state index is whl + j
+    for k, name in enumerate(prep.event_names):
+        if name.startswith("wheel."):
+            _, body, wheel, limit = name.split(".")
+            b = next(i for i, bs in enumerate(prep.model.bodies) if bs.name == body)
+            j = prep.model.wheel_index[(b, wheel)] - whl
+            targets.append((k, j, "torque_limit_lock" if limit == "max_torque" else "speed_limit_lock"))
+    return targets
+
+
+def _sides_setter(prep: Prepared, pe: np.ndarray):
+    """The driver's ``at_sides``: each wheel limit's branch locked to its event component's side
+    (bodies/wheels.py::motor_torque; negative side = the limit acts); None without wheel events."""
+    targets = _wheel_targets(prep)
+    if not targets:
+        return None
+    view = ParamView(pe)
+
+    def at_sides(sides) -> None:
+        for k, j, field in targets:
+            setattr(view.wheel(j), field, 1.0 if sides[k] < 0.0 else 0.0)
+
+    return at_sides
+
+
+def branch_spans(prep: Prepared, events) -> list | None:
+    """The wheel limits' branches the run held, span by span, for the diagnostics
+    (diagnostics.compute): the sides at the start, as the driver finds them, then each located
+    event (t, component, side) in order; None without wheel-limit events."""
+    from .integrators.driver import event_values_at
+
+    targets = _wheel_targets(prep)
+    if not targets:
+        return None
+    g = event_values_at(system_events, prep.t0_s, prep.y0, prep.model.fresh_params(), len(prep.event_names))
+    sides = np.where(g < 0.0, -1.0, 1.0)
+
+    def locks():
+        return [(j, field, 1.0 if sides[k] < 0.0 else 0.0) for k, j, field in targets]
+
+    spans = [(-math.inf, locks())]
+    for t, comp, side in events:
+        sides[int(comp)] = float(side)
+        spans.append((float(t), locks()))
+    return spans
 
 
 def integrate_prepared(prep: Prepared, p: np.ndarray, progress=None):
@@ -465,7 +564,7 @@ def run_segments(prep: Prepared, plan: SegmentPlan, progress=None, store=None):
     t_last = float(t_out[-1])
     seg_s = plan.length_s if plan.length_s < t_last else t_last
     loop = store.resume if store is not None and store.resume is not None else {
-        "k": 0, "t_a": 0.0, "y_in": prep.y0, "k_out": 0, "budget": prep.max_steps, "sums": {}, "events": [],
+        "k": 0, "t_a": prep.t0_s, "y_in": prep.y0, "k_out": 0, "budget": prep.max_steps, "sums": {}, "events": [],
         "anchors": [],
     }  # fmt: skip
     k, t_a, y_in, k_out, budget = loop["k"], loop["t_a"], loop["y_in"], loop["k_out"], loop["budget"]
@@ -490,7 +589,9 @@ def run_segments(prep: Prepared, plan: SegmentPlan, progress=None, store=None):
                                                                             budget=budget), ctx)  # fmt: skip
         res = integrate(prep.method, plan.rhs, t_a, z0, seg_t, plan.pe, prep.rtol, plan.atol, h_max=prep.h_max,
                         max_steps=budget, progress=progress, second_order=plan.second_order,
-                        newton=choose_newton(plan.pe, z0.size, plan.second_order), **ev, **io)  # fmt: skip
+                        newton=choose_newton(plan.pe, z0.size, plan.second_order), breaks=prep.breaks_s,
+                        at_interval=_interval_setter(plan.pe), at_sides=_sides_setter(prep, plan.pe), **ev,
+                        **io)  # fmt: skip
         if k == 0 and t_b >= t_last and not extra and store is None and plan.anchor is None:
             # one segment: the driver's result as it is, in Cowell rows
             y_rows = plan.leave(ctx, res.t, res.y)
@@ -554,9 +655,11 @@ def _integrate_cowell(prep: Prepared, p: np.ndarray, progress, **store):
     from .integrators.driver import integrate
     from .tether.newton_solver import choose as choose_newton
 
-    return integrate(prep.method, cowell_rhs, 0.0, prep.y0, prep.t_out, p, prep.rtol, prep.atol, h_max=prep.h_max,
-                     max_steps=prep.max_steps, progress=progress, second_order=_second_order(prep.model),
-                     newton=choose_newton(p, prep.y0.size, _second_order(prep.model)), **_event_args(prep),
+    return integrate(prep.method, cowell_rhs, prep.t0_s, prep.y0, prep.t_out, p, prep.rtol, prep.atol,
+                     h_max=prep.h_max, max_steps=prep.max_steps, progress=progress,
+                     second_order=_second_order(prep.model),
+                     newton=choose_newton(p, prep.y0.size, _second_order(prep.model)), breaks=prep.breaks_s,
+                     at_interval=_interval_setter(p), at_sides=_sides_setter(prep, p), **_event_args(prep),
                      **store)  # fmt: skip
 
 

@@ -54,6 +54,18 @@ class Result:
     def ok(self) -> bool:
         return self.status == 0
 
+    @property
+    def events(self) -> pd.DataFrame:
+        """The located events of the run, in time order: ``t_s``, ``event`` (the component: a
+        rod going slack, ``wheel.BODY.WHEEL.max_torque`` / ``.max_speed`` for a wheel limit,
+        ``stop.altitude``) and ``side`` (``slack``/``taut``; ``entered``/``left`` for a limit
+        starting or ceasing to act; empty for the stop)."""
+        rows = self.stats.get("events", []) if isinstance(self.stats, dict) else []
+        return pd.DataFrame(
+            {"t_s": [float(e["t_s"]) for e in rows], "event": [str(e["event"]) for e in rows],
+             "side": [str(e.get("side", "")) for e in rows]}
+        )  # fmt: skip
+
     @classmethod
     def from_run(cls, scene, prep, t, Y, d, stats, status, message, p) -> "Result":
         model = prep.model
@@ -251,6 +263,17 @@ def _rigid_diagnostics(model, Y, d, bodies, rots, nrows) -> dict:
         out[f"{body.name}.roll_rad"] = np.arctan2(C[:, 2, 1], C[:, 2, 2])
         out[f"{body.name}.pitch_rad"] = np.arcsin(np.clip(-C[:, 2, 0], -1.0, 1.0))
         out[f"{body.name}.yaw_rad"] = np.arctan2(C[:, 1, 0], C[:, 0, 0])
+        # the body's own rotational angular momentum about G, inertial: R (J_s omega_b + sum a_k h_k)
+        # (the angmom_* columns add every part's orbital m r x v to it)
+        JS = np.asarray(body.rigid.inertia_kg_m2, float) - sum(
+            (w.inertia_kg_m2 * np.outer(w.axis, w.axis) for w in body.rigid.wheels), np.zeros((3, 3))
+        )  # fmt: skip
+        Lb = Y[:, off + 4 : off + 7] @ JS.T
+        for w in body.rigid.wheels:
+            Lb = Lb + np.outer(Y[:, model.wheel_index[(b, w.name)]], np.asarray(w.axis, float))
+        L = np.einsum("nij,nj->ni", rots[:, b], Lb)
+        for j, ax in enumerate("xyz"):
+            out[f"{body.name}.angmom_rot_{ax}_kg_m2_s"] = L[:, j]
         for j, ax in enumerate("xyz"):
             out[f"{body.name}.control_{ax}_N_m"] = d["control"][:, b, j]
         for w in body.rigid.wheels:

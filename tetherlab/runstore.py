@@ -166,6 +166,8 @@ class _Store:
         self.part_rows = int(part_rows)
         self.m = int(prep.t_out.size)
         self.n = int(prep.model.state.size)
+        # the located events so far (the wheel limits' branches the diagnostics evaluate with)
+        self.events: list = []
 
     # -- derived tables ------------------------------------------------------------------------
     def write_part(self, k: int, t: np.ndarray, Y: np.ndarray, p: np.ndarray, first: np.ndarray | None) -> None:
@@ -181,7 +183,9 @@ class _Store:
             t = np.concatenate([[self.prep.t_out[0]], t])
             Y = np.concatenate([first[None, :], Y])
         Y = np.asarray(Y)
-        d = diag.compute(self.prep.model, t, Y)
+        from .pipeline import branch_spans
+
+        d = diag.compute(self.prep.model, t, Y, branch_spans(self.prep, self.events))
         r = Result.from_run(self.scene, self.prep, t, Y, d, {}, 0, "", p)
         for name, frame in zip(TABLES, (r.timeseries, r.diagnostics)):
             if first is not None:
@@ -355,7 +359,7 @@ def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
                 "t": float(z["t"]), "h": float(z["h"]), "done": int(z["done"]), "budget": int(z["budget"]),
                 "y": z["y"].copy(), "stats": z["stats"].copy(), "ev": z["ev"].copy(),
                 "ws": [z[f"ws{i}"].copy() for i in range(int(z["n_ws"]))], "resume": bool(z["resume"]),
-                "events": [tuple(e) for e in z["events"].tolist()],
+                "events": [tuple(e) for e in z["events"].tolist()], "sides": z["sides"].tolist(),
                 "wall_s": float(z["wall_s"]), "n_chunks": int(z["n_chunks"]),
                 # the segment loop's state (pipeline.run_segments) and the driver's rows in it
                 "seg_done": int(z["seg_done"]),
@@ -480,6 +484,7 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
     p = plan.pe  # the block the kernels write (counters, failure records): the one checkpointed
     have = store.parts_present()
     if restart is not None:
+        store.events = list(restart["loop"]["events"]) + list(restart["events"])
         store.write_full_parts(states, restart["done"], p, have)  # any a kill left unwritten
     wall_before = restart["wall_s"] if restart else 0.0
     chunks_before = restart["n_chunks"] if restart else 0
@@ -501,6 +506,7 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
             np.savez(
                 tmp, t=state["t"], h=state["h"], done=done, budget=state["budget"], y=state["y"],
                 stats=state["stats"], ev=state["ev"], resume=state["resume"], events=ev, p=p,
+                sides=np.asarray(state["sides"], float),
                 n_ws=len(state["ws"]), wall_s=wall_before + time.perf_counter() - t_wall,
                 n_chunks=chunks_before, seg_done=state["done"], seg_k=loop["k"], seg_t_a=loop["t_a"],
                 seg_y_in=np.asarray(loop["y_in"], float), seg_k_out=loop["k_out"], seg_budget=loop["budget"],
@@ -518,6 +524,7 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
     with _Signals() as sig:
 
         def on_chunk(state, done, loop, y_out):
+            store.events = list(loop["events"]) + list(state["events"])
             store.write_full_parts(states, done, p, have)
             if sig.hit is not None or time.perf_counter() - last_ck[0] >= checkpoint_s:
                 save_checkpoint(state, done, loop, y_out)
@@ -695,6 +702,7 @@ def _finish(store: _Store, record: dict, res, p, states, wall_s: float, chunks_b
         states.flush()
     B = store.part_rows
     have = store.parts_present()
+    store.events = list(res.events)
     for k in range(math.ceil(rows / B)):
         a, b = k * B, min((k + 1) * B, rows)
         if k in have and b - a == B:

@@ -133,6 +133,14 @@ class Model:
     def n_state(self) -> int:
         return P.ParamView(self.p).n_state
 
+    def breakpoints_s(self) -> np.ndarray:
+        """Every corner and jump of the model's time tables (the wheel torque tables), sorted,
+        each once: where the right-hand side has a kink or a jump in time, so the integrators land
+        a step on each and restart there (docs/integrators.md section 14)."""
+        times = [x for b in self.bodies if getattr(b, "rigid", None) is not None
+                 for w in b.rigid.wheels for x in w.times_s]  # fmt: skip
+        return np.unique(np.asarray(times, dtype=float))
+
     def fresh_params(self) -> np.ndarray:
         """A copy of the parameter block (the kernel writes scratch and counters into it)."""
         return self.p.copy()
@@ -248,6 +256,7 @@ def build_model(
     v.n_quadrature = quadrature
     v.fail_rod = -1
     v.min_strain = MIN_STRAIN
+    v.interval_end_s = -1.0  # no breakpoint: tables right-continuous (the driver sets it while integrating)
     v.n_qtrans = state.n_qt
     v.attitude_index = state.attitude.start
     v.n_rigid = len(rigid)
@@ -354,6 +363,8 @@ def build_model(
             wv.torque_N_m = w.torque_N_m
             wv.max_speed_rad_s = w.max_speed_rad_s
             wv.max_torque_N_m = w.max_torque_N_m
+            wv.torque_limit_lock = -1.0  # decided per evaluation until the driver locks it
+            wv.speed_limit_lock = -1.0
             if w.mode == "table":
                 nt = len(w.times_s)
                 wv.table_offset = tab

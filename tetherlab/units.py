@@ -5,6 +5,10 @@ parses it with :mod:`astropy.units`, checks its dimension against what the key n
 plain float in SI (angles in rad).  Past this boundary the simulator only sees SI floats, so unit
 mistakes are caught once, at load, with the key named.
 
+Angular rates are written in the field's units: "rad/s", "deg/s", "rpm", "rev/min", "rev/s"
+(astropy knows no revolution; :data:`REVOLUTION` and :data:`RPM` are defined here as exact multiples
+of 2 pi rad and enabled only while a value is parsed, so they never leak into astropy's registry).
+
 A bare number where a unit is required is refused ("missing unit"): guessing degrees versus
 radians or km versus m is exactly the silent error this layer exists to prevent.  NaN and infinity
 are refused everywhere, since no physical input is either.
@@ -20,6 +24,13 @@ from dataclasses import dataclass
 import astropy.units as u
 
 from .errors import SceneError
+
+#: One revolution, 2 pi rad ("rev", "revolution"); "rev/s", "rev/min".
+REVOLUTION = u.def_unit(["rev", "revolution"], 2.0 * math.pi * u.rad, doc="one revolution (2 pi rad)")
+#: Revolutions per minute ("rpm"), the unit wheel and spin rates are quoted in.
+RPM = u.def_unit(["rpm"], REVOLUTION / u.min, doc="revolutions per minute")
+#: The unit spellings of an angular rate a scene accepts (docs/scenes.md lists them).
+ANGULAR_RATE_SPELLINGS = ("rad/s", "deg/s", "rpm", "rev/min", "rev/s")
 
 
 @dataclass(frozen=True)
@@ -51,7 +62,7 @@ DENSITY = Kind("kg / m3", "a density", "2700 kg/m3")
 LINEAR_DENSITY = Kind("kg / m", "a linear density", "2 g/m")
 DIMENSIONLESS = Kind("", "a number", "0.5")
 MOMENT_OF_INERTIA = Kind("kg m2", "a moment of inertia", "400 kg m2")
-ANGULAR_RATE = Kind("rad / s", "an angular rate", "0.1 deg/s")
+ANGULAR_RATE = Kind("rad / s", "an angular rate in rad/s, deg/s, rpm, rev/min or rev/s", "500 rpm")
 TORQUE = Kind("N m", "a torque", "0.05 N m")
 ANGULAR_MOMENTUM = Kind("N m s", "an angular momentum (torque x time)", "20 N m s")
 
@@ -67,6 +78,7 @@ _KNOWN_KINDS = (
     MODULUS,
     DENSITY,
     LINEAR_DENSITY,
+    ANGULAR_RATE,
 )
 
 
@@ -128,7 +140,7 @@ def parse_quantity(value: object, *, key: str) -> u.Quantity:
         try:
             # Unit-parse warnings (deprecated spellings and the like) must not leak out as
             # warnings far from the key: a value that does not parse cleanly is reported here.
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), u.add_enabled_units([REVOLUTION, RPM]):
                 warnings.simplefilter("error")
                 quantity = u.Quantity(value)
         except (TypeError, ValueError, Warning) as exc:

@@ -58,19 +58,48 @@ def _rot_of_quat(q) -> np.ndarray:
     return Rotation.from_quat([x, y, z, w]).as_matrix()
 
 
+def orbit_frame_needs(body) -> list[tuple[str, str]]:
+    """The keys of a rigid body that read its orbit frame, each with the value that would not:
+    the default attitude ("orbit") and the default rate frame ("orbit", zero relative to the
+    orbit frame) both do.  Empty for a body whose attitude and rate are inertial."""
+    rig = body.rigid
+    key = f"bodies.{body.name}.rigid"
+    out = []
+    a = rig.attitude
+    if a.kind == "orbit" or a.frame == "orbit":
+        out.append((f"{key}.attitude", "an inertial attitude, e.g. attitude = { quaternion = [1.0, 0.0, 0.0, 0.0] }"))
+    if rig.angular_velocity_frame == "orbit":
+        out.append((f"{key}.angular_velocity",
+                    "an inertial rate, e.g. angular_velocity = { vector = ['0 rad/s', '0 rad/s', '0 rad/s'], frame = 'body' }"))
+    return out
+
+
+def undefined_frame_error(missing: list[tuple[str, str]]) -> SceneError:
+    """One error naming every key that needs a value because an orbit frame is undefined (a body
+    at rest, or moving along its radius: r x v = 0, as in free space)."""
+    keys = [k for k, _ in missing]
+    expected = "; ".join(f"{k}: {fix}" for k, fix in missing)
+    return SceneError(
+        keys[0],
+        f"a value for each of {len(keys)} key(s) that default to the orbit frame ({expected})",
+        "no orbit frame: the body's r x v = 0 (free space, or a body at rest), so the default attitude and "
+        "angular velocity, both relative to the orbit frame, are undefined",
+    )
+
+
 def body_attitude(body, r, v) -> tuple[np.ndarray, np.ndarray]:
     """(R body -> inertial, omega in body axes) of a rigid scene body whose centre of mass is at
-    (r, v)."""
+    (r, v).  Where the orbit frame is undefined (r x v = 0) every key that reads it is named in one
+    :class:`SceneError`."""
     from scipy.spatial.transform import Rotation
 
     rig = body.rigid
-    key = f"bodies.{body.name}.rigid"
     O, w_o = _orbit_frame(np.asarray(r, float), np.asarray(v, float))
+    if O is None:
+        missing = orbit_frame_needs(body)
+        if missing:
+            raise undefined_frame_error(missing)
     a = rig.attitude
-    needs_frame = a.kind == "orbit" or a.frame == "orbit"
-    if needs_frame and O is None:
-        raise SceneError(f"{key}.attitude", "an inertial attitude (frame = 'inertial'): the orbit frame is undefined "
-                         "for this body (r x v = 0)", "an attitude relative to the orbit frame")  # fmt: skip
     if a.kind == "orbit":
         R = O.copy()
     else:
@@ -78,9 +107,6 @@ def body_attitude(body, r, v) -> tuple[np.ndarray, np.ndarray]:
         R = O @ Rb if a.frame == "orbit" else Rb
     w = np.asarray(rig.angular_velocity_rad_s, float)
     if rig.angular_velocity_frame == "orbit":
-        if O is None:
-            raise SceneError(f"{key}.angular_velocity", "frame = 'body': the orbit frame is undefined for this body "
-                             "(r x v = 0)", "a rate relative to the orbit frame (the default)")  # fmt: skip
         w = w + R.T @ w_o
     return R, w
 
@@ -152,10 +178,17 @@ def forest_state(scene, graph, model: Model, mu: float):
         # attitudes from the current guess of each body's state
         R = {}
         W = {}
+        missing = []  # every key of every body that needs an orbit frame it does not have
         for n, b in kindex.items():
             body = by_name[n]
             if body.rigid is not None:
+                if _orbit_frame(*(np.asarray(x, float) for x in pos_guess[n]))[0] is None:
+                    missing.extend(orbit_frame_needs(body))
+                    if missing:
+                        continue
                 R[n], W[n] = body_attitude(body, *pos_guess[n])
+        if missing:
+            raise undefined_frame_error(missing)
         pos = {}  # body -> centre of mass, relative to its component's root (anchored later)
         dvec = {}  # tether -> (n, 3) kernel-order rod vectors (2 sqrt3 d)
         for ri, root in enumerate(roots):

@@ -226,7 +226,7 @@ def warm_up(method, rhs, n, p):
 def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_steps=10**7,
               chunk_seconds=0.5, progress=None, fixed_step=False, second_order=False,
               event=None, n_events=0, terminal=(), newton="auto", y_out=None, checkpoint=None,
-              restart=None):  # fmt: skip
+              restart=None, breaks=(), at_interval=None, at_sides=None):  # fmt: skip
     """Integrate y' = rhs(t, y; p) from t0 and return the solution at the times ``t_out``.
 
     ``method``: one of :data:`METHODS`.  ``rhs``: a cfunc with :data:`tetherlab._jit.RHS_SIG`.
@@ -260,17 +260,33 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     ``restart=state`` continues from such a state.  Since a chunk ends right after an accepted
     step and the kernels continue from (t, y, h, p, event state, RADAU5 workspace) exactly, a
     continued run computes the same outputs bit for bit.
+
+    Breakpoints (docs/integrators.md section 14): ``breaks``, times where the right-hand side has
+    a kink or a jump in t (the corners and jumps of time tables).  The integration is split into
+    smooth intervals between them: a step lands exactly on each breakpoint and the method restarts
+    there as from a new initial value (fresh initial step, RADAU5's workspace rebuilt, the event
+    state cleared), so no step straddles a breakpoint and nothing estimated before it is used after
+    it.  ``at_interval(t_b)`` is called before each interval is integrated with its end t_b (a
+    breakpoint or the last output time): the model uses it to evaluate its tables from the left at
+    t_b (the driver knows no layout).  An event component whose side changes at a breakpoint (a
+    jump in the table it depends on) is reported as an event at the breakpoint's time.
+
+    ``at_sides(sides)`` (with events): called with the side of every event component (+1: g >= 0,
+    -1: g < 0) at the start, after each located event and at each breakpoint, and only then: a
+    model may lock the branch of each switch to it, so that the right-hand side is smooth between
+    located events (discontinuity locking; bodies/wheels.py).  The sides travel in checkpoints.
     """
     t0, y, tt, rtol, atol_v, h0, h_max, max_steps, chunk_seconds, fixed_step = _validate(
         method, rhs, t0, y0, t_out, p, rtol, atol, h0, h_max, max_steps, chunk_seconds,
         progress, fixed_step,
     )  # fmt: skip
     ne, terminal = _check_events(method, event, n_events, terminal)
+    bks = _check_breaks(breaks, t0, tt, at_interval, at_sides)
     if method in SCIPY_METHODS:
         from .scipy_backend import integrate_scipy
 
         return integrate_scipy(method.split(":", 1)[1], rhs, t0, y, tt, p, rtol, atol_v, h0,
-                               h_max, max_steps, chunk_seconds, progress)  # fmt: skip
+                               h_max, max_steps, chunk_seconds, progress, bks, at_interval)  # fmt: skip
 
     n = y.size
     m = tt.size
@@ -302,6 +318,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
     ws = new_ws()
     ev = _NO_EV.copy()
     events = []
+    sides = np.ones(ne)
     stopped_by = None
     t_stop_row = None
 
@@ -322,16 +339,60 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
             a[...] = b
         events = [tuple(e) for e in restart["events"]]
         events = [(float(a), int(b), int(c)) for a, b, c in events]
+        sides = np.array(restart["sides"], dtype=float) if ne > 0 else sides
+    elif ne > 0 and at_sides is not None:
+        if at_interval is not None:
+            ib0 = int(np.searchsorted(bks, t, side="right"))
+            at_interval(float(bks[ib0]) if ib0 < bks.size else float(tt[-1]))
+        sides = np.where(event_values_at(event, t, y, p, ne) < 0.0, -1.0, 1.0)
+        at_sides(sides.copy())
     wall0 = time.perf_counter()
     while True:
         steps_before = int(stats[ST_ACCEPTED])
         c0 = time.perf_counter()
-        status, t, h, nd = _call_kernel(method, rhs, t, y, tt[done:], p, rtol, atol_v, h, h_max,
-                                        min(chunk, budget), y_out[done:], stats, fixed_step, ws,
+        # the smooth interval: up to the next breakpoint after t, else to the last output
+        ib = int(np.searchsorted(bks, t, side="right"))
+        t_b = float(bks[ib]) if ib < bks.size else float(tt[-1])
+        if at_interval is not None:
+            at_interval(t_b)
+        if ib < bks.size:
+            k_in = int(np.searchsorted(tt, t_b, side="right"))  # outputs <= t_b (k_in < m: t_b < tt[-1])
+            if k_in > done and tt[k_in - 1] == t_b:
+                sub_t, n_real = tt[done:k_in], k_in - done
+            else:
+                # t_b is not an output time: it is handed to the kernel as the last one, its row
+                # the next output's (written again when that output is reached)
+                sub_t, n_real = np.concatenate([tt[done:k_in], [t_b]]), k_in - done
+            sub_y = y_out[done : done + sub_t.size]
+        else:
+            sub_t, sub_y, n_real = tt[done:], y_out[done:], m - done
+        status, t, h, nd = _call_kernel(method, rhs, t, y, sub_t, p, rtol, atol_v, h, h_max,
+                                        min(chunk, budget), sub_y, stats, fixed_step, ws,
                                         resume, event, ne, ev)  # fmt: skip
         n_chunks += 1
         resume = True
-        done += int(nd)
+        done += min(int(nd), n_real)
+        if status == OK and ib < bks.size:
+            # at the breakpoint: restart afresh on the next interval (events whose side the jump
+            # changed are reported at its time)
+            nxt = float(bks[ib + 1]) if ib + 1 < bks.size else float(tt[-1])
+            if ne > 0:
+                before = event_values_at(event, t, y, p, ne)
+                if at_interval is not None:
+                    at_interval(nxt)
+                after = event_values_at(event, t, y, p, ne)
+                for comp in range(ne):
+                    if (before[comp] < 0.0) != (after[comp] < 0.0):
+                        events.append((float(t), comp, 1 if after[comp] >= 0.0 else -1))
+                sides = np.where(after < 0.0, -1.0, 1.0)
+                if at_sides is not None:
+                    at_sides(sides.copy())
+            resume = False
+            ws = new_ws()
+            ev = _NO_EV.copy()
+            if not fixed_step:
+                h = 0.0
+            status = MAX_STEPS  # keep going (the budget check below still applies)
         if status == EVENT:
             # Take the integration exactly to the event (the right end of its bracket, already
             # on the new side), filling the outputs before it, then restart there afresh.
@@ -352,6 +413,16 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
             if status != OK:
                 break
             events.append((t, comp, new_side))
+            if at_sides is not None:
+                # every other component from the state: one that changed side twice inside a
+                # step (not seen) must not keep a stale branch; such a change is reported here
+                g = event_values_at(event, t, y, p, ne)
+                for c in range(ne):
+                    s_c = float(new_side) if c == comp else (-1.0 if g[c] < 0.0 else 1.0)
+                    if c != comp and s_c != sides[c]:
+                        events.append((t, c, int(s_c)))
+                    sides[c] = s_c
+                at_sides(sides.copy())
             resume = False  # RADAU5's workspace holds the uncommitted step: start afresh
             ws = new_ws()
             if h_sub > 0.0:
@@ -370,7 +441,7 @@ def integrate(method, rhs, t0, y0, t_out, p, rtol, atol, h0=0.0, h_max=0.0, max_
         if status != MAX_STEPS or budget <= 0:
             break
         if checkpoint is not None:
-            checkpoint(_loop_state(t, y, h, done, budget, stats, ev, ws, resume, events))
+            checkpoint(_loop_state(t, y, h, done, budget, stats, ev, ws, resume, events, sides))
         rate = steps / max(dt, 1e-9)
         chunk = int(min(max(rate * chunk_seconds, 1.0), chunk * _MAX_CHUNK_GROWTH))
     wall_s = time.perf_counter() - wall0
@@ -436,14 +507,39 @@ def _ws_arrays(ws):
     return out
 
 
-def _loop_state(t, y, h, done, budget, stats, ev, ws, resume, events) -> dict:
+def _loop_state(t, y, h, done, budget, stats, ev, ws, resume, events, sides=()) -> dict:
     """Everything :func:`integrate`'s loop carries between kernel calls (copies), for
     ``checkpoint``/``restart``: with ``p`` it determines the rest of the run."""
     return {
         "t": float(t), "h": float(h), "done": int(done), "budget": int(budget), "y": y.copy(),
         "stats": stats.copy(), "ev": ev.copy(), "ws": [a.copy() for a in _ws_arrays(ws)], "resume": bool(resume),
-        "events": [tuple(e) for e in events],
+        "events": [tuple(e) for e in events], "sides": [float(x) for x in sides],
     }  # fmt: skip
+
+
+def _check_breaks(breaks, t0, tt, at_interval, at_sides=None) -> np.ndarray:
+    """The breakpoints strictly inside (t0, last output time), sorted, each once (and the two
+    callbacks checked)."""
+    for name, f in (("at_interval", at_interval), ("at_sides", at_sides)):
+        if f is not None and not callable(f):
+            raise ValueError(f"{name}: expected a callable or None; got {type(f).__name__}")
+    b = _as_vector("breaks", breaks).ravel()
+    if not np.all(np.isfinite(b)):
+        raise ValueError("breaks: expected finite times; got NaN or Inf")
+    b = np.unique(b)
+    return np.ascontiguousarray(b[(b > t0) & (b < tt[-1])])
+
+
+def event_values_at(event, t, y, p, ne) -> np.ndarray:
+    """g(t, y) of the event function, called from Python (at the start, at a located event, at a
+    breakpoint once per side)."""
+    import ctypes
+
+    g = np.zeros(ne)
+    yc = np.ascontiguousarray(y, dtype=np.float64)
+    P = ctypes.POINTER(ctypes.c_double)
+    event.ctypes(float(t), yc.ctypes.data_as(P), g.ctypes.data_as(P), p.ctypes.data_as(P))
+    return g
 
 
 def _check_events(method, event, n_events, terminal):

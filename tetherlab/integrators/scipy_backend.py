@@ -51,9 +51,12 @@ class _RhsFailure(Exception):
 
 
 def integrate_scipy(solver, rhs, t0, y0, t_out, p, rtol, atol, h0, h_max, max_steps,
-                    chunk_seconds, progress):  # fmt: skip
+                    chunk_seconds, progress, breaks=(), at_interval=None):  # fmt: skip
     """Run scipy's ``solver`` (a key of :data:`SOLVERS`); arguments already validated by the
-    driver (``atol`` is an array, ``t_out`` non-decreasing and >= t0)."""
+    driver (``atol`` is an array, ``t_out`` non-decreasing and >= t0).  ``breaks`` (sorted,
+    inside (t0, t_out[-1])): a new solver object is started at each, as from a new initial value,
+    its ``t_bound`` the next breakpoint (scipy's steps land on t_bound), with ``at_interval(t_b)``
+    called first (driver.integrate)."""
     if solver not in SOLVERS:
         raise ValueError(f"solver: expected one of {', '.join(SOLVERS)}; got {solver!r}")
     cls = SOLVERS[solver]
@@ -89,14 +92,31 @@ def integrate_scipy(solver, rhs, t0, y0, t_out, p, rtol, atol, h0, h_max, max_st
     next_report = wall0 + chunk_seconds
     solver_obj = None
     fail_t = None
+    ends = [float(b) for b in breaks] + [float(t_out[-1])]
+    piece = 0
+    done_pieces = {"njev": 0, "nlu": 0}  # Jacobians and LU factorisations of the finished pieces
+
+    def start(t_a, y_a, first):
+        if at_interval is not None:
+            at_interval(ends[piece])
+        return cls(
+            fun, t_a, y_a, ends[piece], rtol=rtol, atol=atol,
+            first_step=first if first > 0 else None,
+            max_step=h_max if h_max > 0 else np.inf,
+        )  # fmt: skip
+
     try:
         if done < m:
-            solver_obj = cls(
-                fun, t0, y0, t_out[-1], rtol=rtol, atol=atol,
-                first_step=h0 if h0 > 0 else None,
-                max_step=h_max if h_max > 0 else np.inf,
-            )  # fmt: skip
-        while solver_obj is not None and solver_obj.status == "running":
+            solver_obj = start(t0, y0, h0)
+        while solver_obj is not None and solver_obj.status in ("running", "finished"):
+            if solver_obj.status == "finished":
+                if piece + 1 >= len(ends):
+                    break
+                piece += 1
+                for k in done_pieces:
+                    done_pieces[k] += int(getattr(solver_obj, k, 0) or 0)
+                solver_obj = start(t_end, y_end, 0.0)
+                continue
             if n_steps >= max_steps:
                 status = MAX_STEPS
                 break
@@ -137,8 +157,8 @@ def integrate_scipy(solver, rhs, t0, y0, t_out, p, rtol, atol, h0, h_max, max_st
         "n_accepted": n_steps,
         "n_rejected": None,  # scipy's solvers do not report rejected steps
         "n_rhs": counts["n_rhs"],
-        "n_jac": int(getattr(solver_obj, "njev", 0) or 0),
-        "n_lu": int(getattr(solver_obj, "nlu", 0) or 0),
+        "n_jac": done_pieces["njev"] + int(getattr(solver_obj, "njev", 0) or 0),
+        "n_lu": done_pieces["nlu"] + int(getattr(solver_obj, "nlu", 0) or 0),
         "rhs_status": counts["rhs_status"],
         "n_newton_fail": None,
         "n_chunks": 1,

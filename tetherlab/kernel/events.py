@@ -8,18 +8,39 @@ so no step ever straddles a kink.  Components, in this order (see :func:`event_c
   ``[stop] altitude``; the run ends when the root body sinks below that altitude;
 * one per rod of every ``tension_only`` tether: g = min(EA eps, EA eps + D eps').  The axial
   force max(0, EA eps + D eps') for eps > 0 (zero otherwise) switches exactly where g changes
-  sign, so a tether going slack or snapping taut is a located event, not luck.
+  sign, so a tether going slack or snapping taut is a located event, not luck;
+* with the Cowell formulation (header H_EV_WHEELS), per wheel with a ``max_torque`` the torque
+  limit max_torque - |command| and per wheel with a ``max_speed`` the speed cut-off
+  (bodies/wheels.py::limit_events): negative while the limit acts, so saturation entered and left
+  are located events.  Their values need the commanded torque, which the controller computes from
+  the whole state: the right-hand side is evaluated once at (t, y) and the wheel scratch read.
 """
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import carray
 
 from .._jit import njit, rhs_cfunc
+from ..bodies.wheels import limit_events
 from ..tether.rod import strain
+from ..tether.solve import system_accelerations
 from .layout import (
+    H_EV_WHEELS,
+    H_NBODY,
+    H_NWHEEL,
+    H_OFF_BSCR,
+    H_OFF_WT,
+    TS_SIZE,
+    BS_SIZE,
+    WS_CMD,
+    WS_SIZE,
+    WS_SPEED,
+    WT_MAXT,
+    WT_MAXW,
+    WT_SIZE,
     H_EV_STOP_R,
     H_NQT,
     H_LEN,
@@ -74,19 +95,36 @@ def event_values(t, y, g_ptr, p):
                 el = min(el, el + damp * epsd)
             g_ptr[k] = el
             k += 1
+    if p[H_EV_WHEELS] != 0.0:
+        nw = int(p[H_NWHEEL])
+        acc = np.empty(h)
+        datt = np.empty(n - 2 * h)
+        code = system_accelerations(t, y[:h], y[h : 2 * h], y[2 * h : n], p, acc, datt)
+        if code != 0:
+            return code
+        wscr = int(p[H_OFF_BSCR]) + int(p[H_NBODY]) * BS_SIZE + int(p[H_NTETH]) * TS_SIZE
+        offw = int(p[H_OFF_WT])
+        for j in range(nw):
+            wb = offw + j * WT_SIZE
+            g_t, g_w = limit_events(p, wb, p[wscr + j * WS_SIZE + WS_CMD], p[wscr + j * WS_SIZE + WS_SPEED])
+            if p[wb + WT_MAXT] > 0.0:
+                g_ptr[k] = g_t
+                k += 1
+            if p[wb + WT_MAXW] > 0.0:
+                g_ptr[k] = g_w
+                k += 1
     return 0
 
 
 @rhs_cfunc
 def system_events(t, y_ptr, g_ptr, p_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
-    event_values(t, carray(y_ptr, (int(p[H_NSTATE]),)), g_ptr, p)
-    return 0
+    return event_values(t, carray(y_ptr, (int(p[H_NSTATE]),)), g_ptr, p)
 
 
-def event_components(model, stop_radius_m: float = 0.0) -> tuple[list[str], list[bool]]:
+def event_components(model, stop_radius_m: float = 0.0, wheel_limits: bool = False) -> tuple[list[str], list[bool]]:
     """Names and terminal flags of the components :func:`system_events` writes for ``model``
-    (whose p must have H_EV_STOP_R set to ``stop_radius_m``)."""
+    (whose p must have H_EV_STOP_R set to ``stop_radius_m`` and H_EV_WHEELS to ``wheel_limits``)."""
     names, terminal = [], []
     if stop_radius_m > 0.0:
         names.append("stop.altitude")
@@ -96,4 +134,14 @@ def event_components(model, stop_radius_m: float = 0.0) -> tuple[list[str], list
             for i in range(sl.stop - sl.start):
                 names.append(f"slack.{t.name}.rod{i + 1}")
                 terminal.append(False)
+    if wheel_limits:
+        for b in model.bodies:  # kernel body order, wheels in file order: the wheel table's order
+            rig = getattr(b, "rigid", None)
+            for w in (rig.wheels if rig is not None else ()):
+                if w.max_torque_N_m > 0.0:
+                    names.append(f"wheel.{b.name}.{w.name}.max_torque")
+                    terminal.append(False)
+                if w.max_speed_rad_s > 0.0:
+                    names.append(f"wheel.{b.name}.{w.name}.max_speed")
+                    terminal.append(False)
     return names, terminal

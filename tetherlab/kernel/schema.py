@@ -140,6 +140,9 @@ WHEEL = Record("wheel", "WT_", 16, (
     _i("table_offset", "WT_TOFF", "offset of its time table (times then values)"),
     _i("table_points", "WT_TN", "points in the table"),
     _f("pinv_row", "WT_PINV", 3, doc="row k of the pseudo-inverse A^+ of the control wheels' axes"),
+    _f("torque_limit_lock", "WT_LOCKT", doc="the torque limit's branch: -1 decided per evaluation, 0 off, 1 on "
+       "(locked between located events: bodies/wheels.py)"),
+    _f("speed_limit_lock", "WT_LOCKW", doc="the speed cut-off's branch: -1 decided per evaluation, 0 off, 1 on"),
 ))
 
 ROD = Record("rod", "RT_", 8, (
@@ -178,9 +181,11 @@ TETHER_SCRATCH = Record("tether_scratch", "TS_", 18, (
     _f("b", "TS_B", 6, doc="end B_n: position (3) and velocity (3)"),
 ))
 
-WHEEL_SCRATCH = Record("wheel_scratch", "WS_", 2, (
+WHEEL_SCRATCH = Record("wheel_scratch", "WS_", 4, (
     _f("torque_N_m", "WS_TAU", unit="N m", doc="motor torque applied"),
     _i("saturation", "WS_SAT", "0 none, 1 torque limit, 2 speed limit"),
+    _f("command_N_m", "WS_CMD", unit="N m", doc="motor torque commanded, before its limits"),
+    _f("speed_rad_s", "WS_SPEED", unit="rad/s", doc="speed relative to the body"),
 ))
 
 ROD_SCRATCH = Record("rod_scratch", "SR_", 24, (
@@ -224,6 +229,10 @@ BLOCK = {
         _i("n_quadrature", "H_NQ", "quadrature nodes per half-rod"),
         _f("min_strain", "H_MIN_STRAIN", doc="strain below which a rod counts as collapsed (FAIL_ROD_COLLAPSE)"),
         _f("stop_radius_m", "H_EV_STOP_R", unit="m", doc="stop when the root's radius falls below this (0 = none)"),
+        _i("wheel_limit_events", "H_EV_WHEELS", "1: the wheels' torque and speed limits are event components "
+           "(kernel/events.py; the Cowell formulation), 0: not located"),
+        _f("interval_end_s", "H_INTERVAL_END", unit="s", doc="end of the smooth interval being integrated (the next "
+           "breakpoint): time tables take their left limit there, their right limit elsewhere (-1 = none)"),
         _i("formulation_offset", "H_OFF_FORM", "offset of the formulation's own parameters (0 = none)"),
         # state-layout descriptor (docs/model.md section 12): y = [q_trans, q_trans', attitude, wheels]
         _i("n_qtrans", "H_NQT", "length of q_trans: q_trans' starts at NQT, the attitude block at 2 NQT"),

@@ -290,13 +290,28 @@ def _parse_wheel(name: str, raw: Any, path: str) -> Wheel:
             if not isinstance(times, (list, tuple)) or not isinstance(values, (list, tuple)) or len(times) != len(values) or len(times) < 1:
                 raise SceneError(key, "times and values: two lists of the same length >= 1", f"{shown(times)}, {shown(values)}")
             ts = tuple(to_si(x, TIME, key=f"{key}.times[{j}]") for j, x in enumerate(times))
-            if any(b <= a for a, b in zip(ts, ts[1:])):
-                raise SceneError(f"{key}.times", "strictly increasing times", shown(times))
+            check_table_times(ts, times, f"{key}.times")
             vs = tuple(to_si(x, TORQUE, key=f"{key}.values[{j}]") for j, x in enumerate(values))
             torque = (ts, vs)
         else:
             torque = to_si(raw_t, TORQUE, key=key)
     return Wheel(name, tuple(float(x) for x in axis / n), inertia, speed, max_speed, max_torque, torque)
+
+
+def check_table_times(ts: tuple, raw: Any, key: str) -> None:
+    """The times of a time table: increasing, a time written twice being a jump (the value before
+    it, then the value after it; an integrator breakpoint, docs/integrators.md section 14).  A time
+    written three times, or going back, says nothing sensible: refused."""
+    for j, (a, b) in enumerate(zip(ts, ts[1:])):
+        if b < a:
+            raise SceneError(key, "non-decreasing times (a time written twice is a jump)",
+                             f"{shown(raw)} (times[{j + 1}] < times[{j}])")
+        if j + 2 < len(ts) and a == b == ts[j + 2]:
+            raise SceneError(key, "each time at most twice (twice: a jump from the first value to the second)",
+                             f"{shown(raw)} (times[{j}] to times[{j + 2}] equal)")
+    if len(ts) >= 2 and ts[0] == ts[1]:
+        raise SceneError(key, "no jump at the first time (the table holds its first value before it: give the "
+                         "value after the jump alone)", shown(raw))
 
 
 def _parse_control(raw: Any, path: str) -> Control:

@@ -302,6 +302,7 @@ class Scene:
     description: str | None = None
     epoch: str | None = None  # ISO date, TDB
     stop: Stop | None = None
+    continue_from: str | None = None  # a finished run's directory: start from its final state
     source: str = field(default="<dict>", compare=False)  # file path, or "<dict>"
     # the graph of bodies and tethers (tetherlab/model/topology.py), derived at load: not part of
     # the scene's value (equality, to_dict) any more than its source is

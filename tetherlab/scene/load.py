@@ -3,6 +3,8 @@ section validated in turn, then the graph and layout checks and the checks of wh
 
 from __future__ import annotations
 
+import os
+
 import dataclasses
 import re
 import tomllib
@@ -61,6 +63,7 @@ def load_scene(path: str | Path) -> Scene:
 
 _TOP_KEYS = (
     "name",
+    "continue_from",
     "description",
     "epoch",
     "duration",
@@ -87,10 +90,18 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
         name = Path(source).stem if source != "<dict>" else "scene"
     description = _string(top["description"], "description") if "description" in top else None
     epoch = _parse_epoch(top["epoch"]) if "epoch" in top else None
+    continue_from = None
+    if "continue_from" in top:
+        raw = _string(top["continue_from"], "continue_from", "the directory of a finished run (a path, e.g. 'runs/phase1')")
+        if not raw.strip():
+            raise SceneError("continue_from", "the directory of a finished run (a path, e.g. 'runs/phase1')", repr(raw))
+        # relative to the working directory, as --out; kept absolute so a resumed run finds it
+        continue_from = os.path.abspath(raw)
 
     central = _parse_central_body(top.get("central_body", {}))
     mu = central.mu_m3_s2
-    effects = _parse_effects(_required(top, "effects", "", "a table of effects, e.g. central_gravity = {}"))
+    effects = _parse_effects(_required(top, "effects", "", "a table of effects, e.g. central_gravity = {}; an empty table "
+                                         "([effects] with nothing under it, or effects = {}) means no effect: free space"))
     origin_singular = [e.name for e in effects if e.name in SINGULAR_AT_ORIGIN]
     bodies = _parse_bodies(
         _required(top, "bodies", "", "a table of bodies, e.g. [bodies.m0] with mass = '1000 kg'"), mu, origin_singular,
@@ -128,6 +139,7 @@ def _parse_scene(data: Mapping[str, Any], source: str) -> Scene:
         description=description,
         epoch=epoch,
         stop=stop,
+        continue_from=continue_from,
         source=source,
         graph=graph,
     )

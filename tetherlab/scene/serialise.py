@@ -119,6 +119,8 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
         out["description"] = scene.description
     if scene.epoch is not None:
         out["epoch"] = scene.epoch
+    if scene.continue_from is not None:
+        out["continue_from"] = scene.continue_from
     out["duration"] = (
         format_si(scene.duration_s, TIME) if scene.duration_s is not None else f"{float(scene.duration_orbits)!r} orbits"
     )
