@@ -36,7 +36,8 @@ def gate_section(gid: str) -> str:
     for sid, _t, fn in CHECKS:
         if gid in _GATES_OF.get(sid, ()):
             return sid
-    for prefix, sid in (("catenary", "study-catenary"), ("stiefel_", "study-stiefel_table"),
+    for prefix, sid in (("uq_deorbit", "study-uncertainty_deorbit"), ("uq_", "study-uncertainty"),
+                        ("catenary", "study-catenary"), ("stiefel_", "study-stiefel_table"),
                         ("deorbit", "study-deorbit"), ("hard_cases", "study-hard_cases"), ("mutation", "controls")):
         if gid.startswith(prefix):
             return sid
