@@ -101,6 +101,11 @@ def throughput(workers=(1, 2, 3), n: int = 12) -> list[dict]:
     from ..uncertainty.runner import run_study
     from ..uncertainty.study import load_uncertainty_study
 
+    from ..benchmarks.deorbit import run_until_altitude
+    from ..scene import load_scene
+
+    # compile (or load) the kernels here first: the spawned workers then load them from the disk cache
+    run_until_altitude(load_scene(ROOT / "studies" / "scenes" / "deorbit-ed.toml").replace(duration="1 d"), max_days=1)
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     rows = []
     for w in workers:
