@@ -97,8 +97,13 @@ def _expected_inverse(d) -> float:
 
 
 def _product(inputs: list[dict], keys) -> np.ndarray:
-    """I K of each sample (the values are SI quantities written as '<float> <unit>')."""
-    return np.array([float(x[keys[0]].split()[0]) * float(x[keys[1]].split()[0]) for x in inputs])
+    """I K of each sample in SI (the values are scene quantities, '<float> <unit>')."""
+    import astropy.units as u
+
+    def si(v) -> float:
+        return float(u.Quantity(v).si.value)
+
+    return np.array([si(x[keys[0]]) * si(x[keys[1]]) for x in inputs])
 
 
 def mean_gate(t_sim: np.ndarray, e_cf: float, n1: float, seed: int) -> tuple[float, dict]:
