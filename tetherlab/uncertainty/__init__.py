@@ -5,7 +5,9 @@ One concept a module: :mod:`.dispersions` (distributions, correlations, their va
 :mod:`.samplers` (MC, Latin hypercube, Sobol'; extendable), :mod:`.study` (the study file),
 :mod:`.runner` (samples -> scenes -> sweep -> statistics), :mod:`.statistics` (bootstrap
 intervals, convergence), :mod:`.sensitivity` (SALib Sobol' and Morris), :mod:`.figures`,
-:mod:`.summaries` (summary functions), :mod:`.verification` (the gate for the machinery).
+:mod:`.summaries` (summary functions), :mod:`.reuse` (parameter-only samples on a prepared model),
+:mod:`.verification` (the machinery's gates), :mod:`.verification_deorbit` (the de-orbit study of
+make verify).
 """
 
 from .runner import run_study, sample_inputs

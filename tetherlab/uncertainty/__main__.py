@@ -1,5 +1,5 @@
 """``python -m tetherlab.uncertainty STUDY.toml --out DIR [--samples N] [--workers N]
-[--scheduler tcp://...] [--sensitivity]``: run an uncertainty study (docs/uncertainty.md)."""
+[--scheduler tcp://...] [--sensitivity] [--no-reuse]``: run an uncertainty study (docs/uncertainty.md)."""
 
 from __future__ import annotations
 
@@ -15,6 +15,8 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int)
     ap.add_argument("--scheduler", help="Dask scheduler address; default: local processes")
     ap.add_argument("--sensitivity", action="store_true", help="run the [sensitivity] design instead")
+    ap.add_argument("--no-reuse", action="store_true",
+                    help="run every sample the full way (replace + prepare) even when only parameters change")
     ap.add_argument("--quiet", action="store_true")
     args = ap.parse_args(argv)
     from .study import load_uncertainty_study
@@ -31,13 +33,14 @@ def main(argv=None) -> int:
     from .runner import run_study
 
     try:
-        res = run_study(study, args.out, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
+        res = run_study(study, args.out, scheduler=args.scheduler, workers=args.workers, progress=not args.quiet,
+                        reuse=not args.no_reuse)
     except KeyboardInterrupt:
         print(f"interrupted: every finished sample is in {args.out}/cache; run the same command again to "
               f"continue", file=sys.stderr)
         return 130
     print(f"{study.name}: {len(res.records)} samples ({res.n_run} run now, {res.n_cached} cached), "
-          f"{len(res.failed)} failed, {res.wall_s:.1f} s -> {args.out}")
+          f"{len(res.failed)} failed, {res.wall_s:.1f} s -> {args.out} (samples: {res.path})")
     for q, st in res.stats.items():
         for name, v in st.items():
             print(f"  {q} {name}: {v['value']:.6g}  [{v['low']:.6g}, {v['high']:.6g}]")

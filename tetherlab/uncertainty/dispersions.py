@@ -19,6 +19,12 @@ reproduces bit for bit.  Kinds (``dist``):
 * ``choice``: ``values`` (a list of scene values, any type: strings, quantities, integers) and
   optional ``weights`` (positive, normalised here).
 
+The ``epoch`` is dispersed as a date: ``normal`` (``mean`` an ISO date, ``sd`` a time such as
+"30 d"), ``uniform`` (``low``, ``high`` ISO dates) or ``truncnormal`` (all four); internally in
+days from J2000 (TDB), written back as an ISO date to the microsecond.  A tether's initial angles
+(``tethers.<name>.initial.theta`` / ``phi``) are dispersable on a scene that leaves the default
+straight shape implicit (its ``to_dict`` omits it): the default's values stand in for it.
+
 Bad input is refused by :func:`validate` before any sample runs, each error naming the key.
 """
 
@@ -65,6 +71,8 @@ class Dispersion:
     unit: str = ""
     values: tuple = ()  # choice only
     weights: tuple[float, ...] = ()  # choice only, summing to 1
+    kind: str = "quantity"  # "epoch": values are days from J2000 (TDB), written as ISO dates
+
 
     def ppf(self, u: np.ndarray) -> np.ndarray:
         """The values (floats in ``unit``; for a choice, the indices into ``values``) at u."""
@@ -90,6 +98,8 @@ class Dispersion:
         """The scene-file value for one sampled float (repr keeps every digit)."""
         if self.dist == "choice":
             return self.values[int(x)]
+        if self.kind == "epoch":
+            return iso_date(float(x))
         return f"{float(x)!r} {self.unit}" if self.unit else float(x)
 
     # analytic moments, for the report and the verification gate
@@ -125,9 +135,48 @@ def _quantity(value: Any, key: str, what: str):
         raise DispersionError(key, f"{what} as a quantity with a unit, e.g. '2 A'", f"{value!r} ({exc})") from None
 
 
+J2000_JD = 2451545.0
+
+
+def iso_date(days: float) -> str:
+    """The ISO date (TDB, to the microsecond) ``days`` after J2000 (two-part Julian date: exact)."""
+    from astropy.time import Time
+
+    t = Time(J2000_JD, days, format="jd", scale="tdb")
+    t.precision = 6
+    return t.isot
+
+
+def _days_of_date(value: Any, key: str, what: str) -> float:
+    from astropy.time import Time
+
+    if isinstance(value, str):
+        for fmt in ("isot", "iso"):
+            try:
+                t = Time(value, format=fmt, scale="tdb")
+                return float((t.jd1 - J2000_JD) + t.jd2)
+            except ValueError:
+                continue
+    raise DispersionError(key, f"{what!r} as an ISO date such as '2026-01-01T00:00:00' (TDB)", repr(value))
+
+
+def _default_initial() -> dict:
+    """The default initial shape as ``Scene.to_dict`` would write it (it omits the default)."""
+    from ..scene.data import InitialShape
+
+    d = InitialShape()
+    return {"shape": d.shape, "theta": f"{float(d.theta_rad)!r} rad", "phi": f"{float(d.phi_rad)!r} rad",
+            "side": d.side, "strain": float(d.strain)}
+
+
 def _lookup(scene_dict: dict, key: str) -> Any:
     node: Any = scene_dict
-    for part in key.split("."):
+    parts = key.split(".")
+    for k, part in enumerate(parts):
+        if (k == 2 and parts[0] == "tethers" and part == "initial" and isinstance(node, dict)
+                and part not in node and "from" in node):
+            node = _default_initial()  # a tether on the default straight shape (omitted by to_dict)
+            continue
         if not isinstance(node, dict) or part not in node:
             return KeyError
         node = node[part]
@@ -175,6 +224,8 @@ def parse_dispersion(raw: Any, scene_dict: dict, where: str = "") -> Dispersion:
                               "default must be given there first)", "no such key")
     if dist == "choice":
         return _parse_choice(raw, key)
+    if key == "epoch":
+        return _parse_epoch(raw, key, dist)
     base_unit = _base_unit(base)
     if base_unit is False:
         raise DispersionError(key, "a key holding a quantity or a number (other keys take dist = 'choice')",
@@ -227,6 +278,29 @@ def parse_dispersion(raw: Any, scene_dict: dict, where: str = "") -> Dispersion:
             raise DispersionError(key, "bounds holding some of the normal's mass", f"[{a:.3g}, {b:.3g}] sd from the mean")
     unit_text = "" if unit is None else unit.to_string()
     return Dispersion(key=key, dist=dist, params=params, unit=unit_text)
+
+
+def _parse_epoch(raw: dict, key: str, dist: str) -> Dispersion:
+    """A dispersed date: dates as ISO strings, the sd as a time; stored in days from J2000."""
+    if dist not in ("normal", "uniform", "truncnormal"):
+        raise DispersionError(key, "dist = 'normal', 'uniform' or 'truncnormal' for a date (or 'choice' of dates)",
+                              repr(dist))
+    params = {name: _days_of_date(raw[name], key, name) for name in ("mean", "low", "high") if name in raw}
+    if "sd" in raw:
+        q = _quantity(raw["sd"], key, "sd")
+        if q is None or not q.unit.is_equivalent("d"):
+            raise DispersionError(key, "'sd' as a time with its unit, e.g. '30 d'", repr(raw["sd"]))
+        params["sd"] = float(q.to_value("d"))
+        if not (math.isfinite(params["sd"]) and params["sd"] > 0.0):
+            raise DispersionError(key, "'sd' > 0", repr(raw["sd"]))
+    if "low" in params and not params["low"] < params["high"]:
+        raise DispersionError(key, "low < high (dates)", f"low = {raw['low']!r}, high = {raw['high']!r}")
+    if dist == "truncnormal":
+        a = (params["low"] - params["mean"]) / params["sd"]
+        b = (params["high"] - params["mean"]) / params["sd"]
+        if stats.norm.cdf(b) - stats.norm.cdf(a) < 1e-12:
+            raise DispersionError(key, "bounds holding some of the normal's mass", f"[{a:.3g}, {b:.3g}] sd from the mean")
+    return Dispersion(key=key, dist=dist, params=params, unit="d", kind="epoch")
 
 
 def _parse_choice(raw: dict, key: str) -> Dispersion:

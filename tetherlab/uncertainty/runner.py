@@ -8,6 +8,13 @@ writes ``samples.csv`` (one row per sample: index, inputs, quantities, ok, error
 ``failures.csv`` and the figures.  A sample whose values do not form a valid scene (a normal mass
 drawn negative) is a failed sample with the scene's error, like one whose run fails: counted and
 listed, never dropped.
+
+Samples that change only parameters of the parameter block (a non-conservative effect's
+quantities: the current, the field strength, a drag coefficient) with a summary function that
+takes them (``accepts_parameter_samples``) are sent as :class:`~.reuse.ParameterSample` s: each
+worker prepares the base scene once and re-packs every sample's values into a copy of its
+parameter block (tetherlab/uncertainty/reuse.py, bit for bit equal to the full path).  Any other
+study takes the full path; ``stats.json`` says which and why.
 """
 
 from __future__ import annotations
@@ -22,6 +29,7 @@ import numpy as np
 
 from ..sweep import RunRecord, resolve, run_sweep, scene_hash
 from .dispersions import apply_copula
+from .reuse import ParameterSample, reuse_refusal
 from .statistics import describe
 from .study import UncertaintyStudy
 
@@ -54,6 +62,7 @@ class StudyResult:
     n_run: int
     n_cached: int
     wall_s: float
+    path: str = "full"  # "parameter-only" (prepared model reused) or "full: <why not>"
 
     @property
     def failed(self) -> list[tuple[int, RunRecord]]:
@@ -89,14 +98,37 @@ def build_scenes(study: UncertaintyStudy, inputs: list[dict]) -> tuple[list, lis
     return scenes, early
 
 
+def sample_path(study: UncertaintyStudy, summary, reuse: bool = True) -> str:
+    """"parameter-only" when the study's samples may reuse a prepared model, else "full: <why>"."""
+    if not reuse:
+        return "full: reuse switched off"
+    if not getattr(summary, "accepts_parameter_samples", False):
+        return f"full: the summary {study.summary} takes scenes only"
+    why = reuse_refusal(study.base_scene(), study.keys)
+    return "parameter-only" if why is None else f"full: {why}"
+
+
+def build_items(study: UncertaintyStudy, inputs: list[dict], path: str) -> tuple[list, list[RunRecord | None]]:
+    """What the sweep runs, one per sample: scenes (full path) or parameter samples."""
+    if path != "parameter-only":
+        return build_scenes(study, inputs)
+    base = study.base_scene()
+    h = scene_hash(base)
+    items = [ParameterSample(base, h, tuple(x.items()), name=f"sample {i}") for i, x in enumerate(inputs)]
+    return items, [None] * len(items)
+
+
 def run_study(study: UncertaintyStudy, out_dir: str | Path, *, scheduler: Any = None, workers: int | None = None,
-              progress: bool = True, figures: bool = True, n_boot: int = 2000) -> StudyResult:
+              progress: bool = True, figures: bool = True, n_boot: int = 2000, reuse: bool = True) -> StudyResult:
+    """Run every sample (cached: a study run again or extended reads back what it has); ``reuse``:
+    parameter-only samples reuse a prepared model (module docstring)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     inputs = sample_inputs(study)
-    scenes, early = build_scenes(study, inputs)
-    idx = [i for i, s in enumerate(scenes) if s is not None]
     summary = resolve(study.summary)
+    path = sample_path(study, summary, reuse)
+    scenes, early = build_items(study, inputs, path)
+    idx = [i for i, s in enumerate(scenes) if s is not None]
     res = run_sweep([scenes[i] for i in idx], summary, cache_dir=out / "cache", scheduler=scheduler,
                     workers=workers, labels=[f"sample {i}" for i in idx], params=[inputs[i] for i in idx],
                     progress=progress, description=study.name)
@@ -111,7 +143,7 @@ def run_study(study: UncertaintyStudy, out_dir: str | Path, *, scheduler: Any = 
         missing = sum(1 for r in records if r.ok and q not in r.summary)
         stats[q] = describe(x, deadlines=study.deadlines.get(q, ()), n_failed=n_failed + missing,
                             n_boot=n_boot, seed=study.seed)
-    result = StudyResult(study, inputs, records, stats, res.n_run, res.n_cached, res.wall_s)
+    result = StudyResult(study, inputs, records, stats, res.n_run, res.n_cached, res.wall_s, path)
     _write(result, out, figures)
     return result
 
@@ -125,8 +157,8 @@ def _write(result: StudyResult, out: Path, figures: bool) -> None:
     doc = {
         "study": study.name, "method": study.method, "samples": study.samples, "seed": study.seed,
         "n_ok": int(frame["ok"].sum()), "n_failed": int((~frame["ok"]).sum()),
-        "n_run_now": result.n_run, "n_cached": result.n_cached, "wall_s": result.wall_s,
-        "dispersions": [{"key": d.key, "dist": d.dist, "unit": d.unit, **d.params,
+        "n_run_now": result.n_run, "n_cached": result.n_cached, "wall_s": result.wall_s, "sample_path": result.path,
+        "dispersions": [{"key": d.key, "dist": d.dist, "unit": d.unit, "kind": d.kind, **d.params,
                          **({"values": list(d.values), "weights": list(d.weights)} if d.dist == "choice" else {})}
                         for d in study.dispersions],
         "correlation": None if study.correlation is None else
@@ -150,7 +182,8 @@ def stats_table(result: StudyResult) -> list[dict]:
     return rows
 
 
-def hashes(study: UncertaintyStudy, n: int | None = None) -> list[str]:
-    """Scene hashes of the samples (the sweep-cache identities): equal for equal samples."""
-    scenes, _ = build_scenes(study, sample_inputs(study, n))
+def hashes(study: UncertaintyStudy, n: int | None = None, reuse: bool = True) -> list[str]:
+    """The samples' sweep-cache identities (scene or parameter-sample hashes): equal for equal samples."""
+    path = sample_path(study, resolve(study.summary), reuse)
+    scenes, _ = build_items(study, sample_inputs(study, n), path)
     return [scene_hash(s) if s is not None else "" for s in scenes]

@@ -28,6 +28,16 @@ D. Convergence: the width of the mean's interval against N (16 independent repli
    ``uq_mc_slope_vs_half``: |slope_MC + 1/2| over three standard errors of the fit;
    ``uq_sobol_slope_steeper``: slope_Sobol' + 3 se + 1/2 (passes below 0: steeper than MC by more than
    three standard errors).
+E. Negative controls of A, C and D (B has its own, above).  Gate ``uq_machinery_negative_controls``:
+   the number of these controls that pass the gate they must fail (0 allowed):
+   * A: the study's decay times with every current 3 % high (T / 1.03: exact, T ~ 1/I), truth
+     unchanged -- a median shifted by 3 %, 2.3 times the median's Bonferroni half-width at N = 512;
+   * C: Ishigami with x1 and x2 swapped in the function, the analytic indices unchanged;
+   * D (MC): a sampler whose stream wraps after 64 points (a reset seed): the width stops shrinking;
+   * D (Sobol'): plain pseudo-random points where the scrambled Sobol' ones should be: slope -1/2.
+
+``python -m tetherlab.uncertainty.verification OUT_DIR`` writes OUT_DIR/uncertainty.md, its gates
+as JSON and the figures (the verify section ``study-uncertainty``).
 """
 
 from __future__ import annotations
@@ -78,7 +88,7 @@ def _closed_form_study(samples: int = 512):
     return load_uncertainty_study(ROOT / "studies" / "uncertainty" / "closed_form.toml", samples=samples)
 
 
-def known_distribution(out_dir: Path) -> tuple[float, list[dict], float]:
+def known_distribution(out_dir: Path) -> tuple[float, list[dict], float, float]:
     from .runner import run_study
     from .summaries import closed_form_decay_days
 
@@ -92,7 +102,9 @@ def known_distribution(out_dir: Path) -> tuple[float, list[dict], float]:
     ratio = _over_ci(st, truth)
     rows = [{"statistic": k, "truth": truth[k], "estimate": st[k]["value"], "low": st[k]["low"],
              "high": st[k]["high"], "error_over_half_width": ratio[k]} for k in truth]
-    return max(ratio.values()), rows, t_med
+    # control: every current 3 % high (T ~ 1/I exactly), the truth kept
+    bad = describe(res.values("decay_days") / 1.03, deadlines=[DEADLINE_D], level=level, seed=study.seed)
+    return max(ratio.values()), rows, t_med, max(_over_ci(bad, truth).values())
 
 
 def _decay(points: np.ndarray, t_med: float) -> np.ndarray:
@@ -115,13 +127,20 @@ def _ishigami(x: np.ndarray, a: float = 7.0, b: float = 0.1) -> np.ndarray:
     return np.sin(x[:, 0]) + a * np.sin(x[:, 1]) ** 2 + b * x[:, 2] ** 4 * np.sin(x[:, 0])
 
 
-def sobol_check(out_dir: Path) -> tuple[float, list[dict]]:
+def _ishigami_swapped(x: np.ndarray) -> np.ndarray:
+    return _ishigami(x[:, [1, 0, 2]])
+
+
+def sobol_check(out_dir: Path) -> tuple[float, list[dict], float]:
     from .sensitivity import run_sensitivity, sobol_of_function
     from .study import parse_study
 
     level = 1.0 - 0.05 / 10
     disp = [Dispersion(f"x{i + 1}", "uniform", {"low": -math.pi, "high": math.pi}) for i in range(3)]
     ish = sobol_of_function(_ishigami, disp, 2048, seed=3, level=level)
+    swapped = sobol_of_function(_ishigami_swapped, disp, 2048, seed=3, level=level)
+    control = max(abs(swapped[d.key][kind] - true[i]) / swapped[d.key][f"{kind}_conf"]
+                  for i, d in enumerate(disp) for kind, true in (("S1", ISHIGAMI_S1), ("ST", ISHIGAMI_ST)))
     rows = []
     for i, d in enumerate(disp):
         for kind, true in (("S1", ISHIGAMI_S1[i]), ("ST", ISHIGAMI_ST[i])):
@@ -147,17 +166,27 @@ def sobol_check(out_dir: Path) -> tuple[float, list[dict]]:
             v, c = idx[k][kind], idx[k][f"{kind}_conf"]
             rows.append({"problem": "closed-form log T", "input": k, "index": kind, "analytic": true, "estimate": v,
                          "half_width": c, "error_over_half_width": abs(v - true) / c})
-    return max(r["error_over_half_width"] for r in rows), rows
+    return max(r["error_over_half_width"] for r in rows), rows, control
+
+
+class _WrappingMC(MonteCarlo):
+    """Negative control: a plain-MC stream that restarts after 64 points (a seed reset)."""
+
+    def _points(self, n):
+        base = super()._points(min(n, 64))
+        return np.resize(base, (n, self.dim))
 
 
 def convergence(out_dir: Path, t_med: float):
     from .figures import convergence_figure
 
     ns = [64, 128, 256, 512, 1024, 2048, 4096]
-    designs = {"MC": MonteCarlo, "Sobol'": Sobol}
+    designs = {"MC": MonteCarlo, "Sobol'": Sobol, "control: MC wrapping after 64": _WrappingMC,
+               "control: MC in place of Sobol'": MonteCarlo}
     curves, slopes = {}, {}
     for name, cls in designs.items():
-        curves[name] = replicated_width(lambda n, r, cls=cls: cls(1, 500 + r).points(n),
+        seed0 = 900 if name.startswith("control: MC in place") else 500
+        curves[name] = replicated_width(lambda n, r, cls=cls, s0=seed0: cls(1, s0 + r).points(n),
                                         lambda u: _decay(u, t_med), ns, replications=16)
         slopes[name] = fit_slope(curves[name])
     fig = convergence_figure(curves, slopes, out_dir / "uq_convergence.png",
@@ -171,7 +200,7 @@ def run(out_dir) -> dict:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     gates, tables, figures = {}, [], []
-    worst, rows, t_med = known_distribution(out)
+    worst, rows, t_med, control_a = known_distribution(out)
     gates["uq_known_distribution_over_ci"] = worst
     tables.append(("Known distribution: closed-form decay time under a log-normal current (512 MC samples "
                    "through the study runner)", rows))
@@ -185,7 +214,7 @@ def run(out_dir) -> dict:
     tables.append((f"Coverage of the 95 % bootstrap intervals over {REPLICATIONS} replications, N = {COVERAGE_N} "
                    f"(floor {floor:.3f})", [{"statistic": k, "MC": cov[k], "shared-seed control": bad[k]} for k in cov]))
 
-    worst_s, srows = sobol_check(out)
+    worst_s, srows, control_c = sobol_check(out)
     gates["uq_sobol_indices_over_ci"] = worst_s
     tables.append(("Sobol' indices against analytic ones (SALib, Saltelli design)", srows))
 
@@ -196,16 +225,41 @@ def run(out_dir) -> dict:
     gates["uq_sobol_slope_steeper"] = s_so + 3.0 * se_so + 0.5
     tables.append(("Convergence of the mean's interval width (16 replications per N)", crows))
     figures.append(fig)
+
+    s_w, se_w = slopes["control: MC wrapping after 64"]
+    s_f, se_f = slopes["control: MC in place of Sobol'"]
+    controls = [
+        ("A: every current 3 % high", "uq_known_distribution_over_ci", control_a, 1.0),
+        ("C: Ishigami x1, x2 swapped", "uq_sobol_indices_over_ci", control_c, 1.0),
+        ("D: MC stream wrapping after 64 points", "uq_mc_slope_vs_half", abs(s_w + 0.5) / (3.0 * se_w), 1.0),
+        ("D: MC points in place of Sobol'", "uq_sobol_slope_steeper", s_f + 3.0 * se_f + 0.5, 0.0),
+    ]
+    gates["uq_machinery_negative_controls"] = float(sum(v <= thr for _c, _g, v, thr in controls))
+    tables.append(("Negative controls: each must fail its gate",
+                   [{"control": c, "gate": g, "value": v, "threshold": thr, "fails it": v > thr}
+                    for c, g, v, thr in controls]))
     return {"gates": gates, "figures": [str(p) for p in figures], "tables": tables}
 
 
-if __name__ == "__main__":
+def main(argv=None) -> int:
     import json
     import sys
 
-    result = run(sys.argv[1] if len(sys.argv) > 1 else "reports/uncertainty")
-    print(json.dumps(result["gates"], indent=1))
+    from ..report import table
+
+    argv = sys.argv[1:] if argv is None else argv
+    out = Path(argv[0] if argv else "reports/uncertainty")
+    result = run(out)
+    md = ["# Uncertainty machinery against known answers", "",
+          "tetherlab/uncertainty/verification.py (docs/uncertainty.md 6) has the budget of every gate.", ""]
     for title, rows in result["tables"]:
-        print(title)
-        for r in rows:
-            print("  ", r)
+        md += [f"**{title}**", "", table(rows), ""]
+    md += [f"![{Path(p).stem}]({Path(p).resolve().relative_to(out.resolve()).as_posix()})" for p in result["figures"]]
+    (out / "uncertainty.md").write_text("\n".join(md) + "\n")
+    (out / "uncertainty_gates.json").write_text(json.dumps(result["gates"], indent=1))
+    print(json.dumps(result["gates"], indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

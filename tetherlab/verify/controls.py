@@ -91,6 +91,25 @@ TOOTHLESS = {
     "model defect moves both alike (it guards the forest's bookkeeping)",
     "conservation_tree_over_bound": "not probed by the harness (the study runs minutes); tests/test_rigid.py runs "
     "the two attachment defects against the same first integrals and both fail them by > 1e6 x the bound",
+    "uq_known_distribution_over_ci": "not probed by the registry (no defect of the uncertainty machinery in it): the "
+    "section's own control, every current 3 % high, must fail it (counted by uq_machinery_negative_controls)",
+    "uq_ci_coverage_floor_over_min": "not probed by the registry: its control is uq_ci_coverage_negative_control "
+    "(4 workers sharing one seed must fail the floor)",
+    "uq_ci_coverage_negative_control": "a control itself (the shared-seed sampler must fail the coverage floor)",
+    "uq_sobol_indices_over_ci": "not probed by the registry: the section's own control, Ishigami with x1 and x2 "
+    "swapped, must fail it (uq_machinery_negative_controls)",
+    "uq_mc_slope_vs_half": "not probed by the registry: the section's own control, an MC stream that wraps after 64 "
+    "points, must fail it (uq_machinery_negative_controls)",
+    "uq_sobol_slope_steeper": "not probed by the registry: the section's own control, plain MC points in place of "
+    "Sobol' ones, must fail it (uq_machinery_negative_controls)",
+    "uq_machinery_negative_controls": "the count of the machinery's controls that missed itself",
+    "uq_deorbit_mean_vs_closed_form": "not probed: 256 de-orbits take minutes; the study's own control, every current "
+    "10 % high, must fail it (uq_deorbit_negative_controls)",
+    "uq_deorbit_slope_vs_closed_form": "not probed: as uq_deorbit_mean_vs_closed_form; the study's own control, the "
+    "prepared model reused without re-packing the sample's values, must fail it (uq_deorbit_negative_controls)",
+    "uq_deorbit_failed": "not probed: a count of failed runs (a defect that makes runs fail is caught by the runs' "
+    "own error reports, listed in failures.csv)",
+    "uq_deorbit_negative_controls": "the count of the de-orbit study's controls that missed itself",
     "mutation_uncaught_defects": "the mutation score itself",
     "mutation_toothless_unexplained": "the count of gates without teeth or reason itself",
 }

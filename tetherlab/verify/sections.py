@@ -36,7 +36,8 @@ def gate_section(gid: str) -> str:
     for sid, _t, fn in CHECKS:
         if gid in _GATES_OF.get(sid, ()):
             return sid
-    for prefix, sid in (("catenary", "study-catenary"), ("stiefel_", "study-stiefel_table"),
+    for prefix, sid in (("uq_deorbit", "study-uncertainty_deorbit"), ("uq_", "study-uncertainty"),
+                        ("catenary", "study-catenary"), ("stiefel_", "study-stiefel_table"),
                         ("deorbit", "study-deorbit"), ("hard_cases", "study-hard_cases"), ("mutation", "controls"),
                         # the rigid-body oracles (studies/rigid_bodies.py, docs/rigid-oracles.md)
                         ("hub_spoke", "study-rigid_bodies"), ("torque_free", "study-rigid_bodies"),

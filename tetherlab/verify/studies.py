@@ -131,7 +131,48 @@ def _rigid_bodies_gates(outdir: Path) -> dict:
     }
 
 
-#: (title, study script in studies/, its arguments after OUTDIR, markdown it writes, gate reader)
+def _uncertainty_gates(outdir: Path) -> dict:
+    """Gates of the uncertainty machinery (tetherlab/uncertainty/verification.py)."""
+    g = json.loads((outdir / "uncertainty_gates.json").read_text())
+    return {
+        "uq_known_distribution_over_ci": g.get("uq_known_distribution_over_ci"),
+        "uq_ci_coverage_floor_over_min": g.get("uq_ci_coverage_floor_over_min"),
+        "uq_ci_coverage_negative_control": g.get("uq_ci_coverage_negative_control"),
+        "uq_sobol_indices_over_ci": g.get("uq_sobol_indices_over_ci"),
+        "uq_mc_slope_vs_half": g.get("uq_mc_slope_vs_half"),
+        "uq_sobol_slope_steeper": g.get("uq_sobol_slope_steeper"),
+        "uq_machinery_negative_controls": g.get("uq_machinery_negative_controls"),
+    }
+
+
+def _uncertainty_deorbit_gates(outdir: Path) -> dict:
+    """Gates of the de-orbit study under uncertainty (tetherlab/uncertainty/verification_deorbit.py)."""
+    g = json.loads((outdir / "uncertainty_deorbit_gates.json").read_text())
+    return {
+        "uq_deorbit_mean_vs_closed_form": g.get("uq_deorbit_mean_vs_closed_form"),
+        "uq_deorbit_slope_vs_closed_form": g.get("uq_deorbit_slope_vs_closed_form"),
+        "uq_deorbit_failed": g.get("uq_deorbit_failed"),
+        "uq_deorbit_negative_controls": g.get("uq_deorbit_negative_controls"),
+    }
+
+
+#: studies that live in the package rather than in the checkout's studies/ (name -> module with main)
+PACKAGE_STUDIES = {
+    "uncertainty": "tetherlab.uncertainty.verification",
+    "uncertainty_deorbit": "tetherlab.uncertainty.verification_deorbit",
+}
+
+
+def _study_module(name: str):
+    if name in PACKAGE_STUDIES:
+        import importlib
+
+        return importlib.import_module(PACKAGE_STUDIES[name])
+    return load_study(name)
+
+
+#: (title, study script in studies/ or PACKAGE_STUDIES, its arguments after OUTDIR, markdown it
+#: writes, gate reader)
 STUDIES = [
     ("Catenary against Irvine's elastic catenary (paper section 4.2)", "catenary", [], "catenary.md", _catenary_gates),
     ("Stiefel-Scheifele: Cowell and DROMO against the oracle (paper section 4.1, Figure 3)", "stiefel_table", [],
@@ -145,6 +186,10 @@ STUDIES = [
     ("Rigid bodies, wheels, attitude control and tether trees (docs/model.md 12)", "rigid_scenes", [], "rigid_scenes.md", None),
     ("Rigid bodies, wheels and hub-and-spoke against the oracles (docs/rigid-oracles.md)", "rigid_bodies", ["--quiet"],
      "rigid_bodies.md", _rigid_bodies_gates),
+    ("Uncertainty machinery against known answers (docs/uncertainty.md 6)", "uncertainty", [], "uncertainty.md",
+     _uncertainty_gates),
+    ("Electrodynamic de-orbit under uncertainty: 256 samples against the closed form (docs/uncertainty.md 7)",
+     "uncertainty_deorbit", [], "uncertainty_deorbit.md", _uncertainty_deorbit_gates),
 ]
 
 
@@ -190,7 +235,7 @@ def run_studies(out: Path, only=None, study_workers: int | None = None):
         t0 = time.perf_counter()
         try:
             pool = ["--workers", str(study_workers)] if study_workers and name in SWEEPING_STUDIES else []
-            load_study(name).main([str(sdir), *extra, *pool])
+            _study_module(name).main([str(sdir), *extra, *pool])
             values.update(gates_fn(sdir) if gates_fn else {})
             md = (sdir / md_name).read_text() if md_name else _summary_md(name, sdir)
             # images and links in the study's Markdown are relative to its own directory
