@@ -25,6 +25,7 @@ from .system import (
     BodySpec,
     ControlSpec,
     Model,
+    ReelSpec,
     RigidSpec,
     TetherSpec,
     WheelSpec,
@@ -64,6 +65,9 @@ class Prepared:
     formulation: str = "cowell"  # "cowell", "cowell-orbit", "dromo-sigma" (point mass) or "dromo-time"
     mu_m3_s2: float = 0.0
     time_element: str = "none"  # DROMO sigma form: "none" (tau) or "linear" (scene.IntegratorSpec)
+    t0_s: float = 0.0  # the run starts here (a phase of a deployment: tetherlab/deployment.py)
+    ref_r_m: np.ndarray | None = None  # the reference state the orbit scales came from
+    ref_v_m_s: np.ndarray | None = None
 
 
 def _body_spec(body) -> BodySpec:
@@ -90,9 +94,13 @@ def _body_spec(body) -> BodySpec:
     return BodySpec(body.name, body.mass_kg, bool(body.fixed), RigidSpec(r.inertia_kg_m2, tuple(wheels), control))
 
 
-def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
+def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: dict | None = None) -> Prepared:
     """Build the model and initial state.  First checks that the run fits the machine
-    (tetherlab/resources.py): all outputs in memory (``simulate``), or streamed to ``out_dir``."""
+    (tetherlab/resources.py): all outputs in memory (``simulate``), or streamed to ``out_dir``.
+
+    ``reel_phase``: a later phase of a deployment after births or retirements
+    (tetherlab/deployment.py): {"rods": {tether name: (rods, deployed length in m)}, "first": the
+    Prepared of the run's first phase (its reference orbit)}; the state is left to the caller."""
     from .resources import check_scene
 
     check_scene(scene, outputs_in_memory=outputs_in_memory, out_dir=out_dir)
@@ -111,10 +119,11 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
     for k, t in enumerate(tethers):
         a_pt = t.from_point_m or zero
         b_pt = t.to_point_m or zero
+        rods, length_m = (reel_phase or {"rods": {}})["rods"].get(t.name, (t.rods, t.length_m))
         specs.append(TetherSpec(
             name=t.name,
-            rods=t.rods,
-            length_m=t.length_m,
+            rods=rods,
+            length_m=length_m,
             ea_n=t.EA_N,
             mass_kg=t.mass_kg,
             damping_n_s=t.damping_N_s,
@@ -127,6 +136,10 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
             from_point_m=tuple(b_pt if graph.tethers[k].reversed else a_pt),
             to_point_m=tuple(a_pt if graph.tethers[k].reversed else b_pt),
             reversed=graph.tethers[k].reversed,
+            reel=None if t.reel is None else ReelSpec(
+                t.reel.law, t.reel.exit, t.length_m, t.reel.speed_m_s, t.reel.rate_1_s, t.reel.rod_length_m,
+                t.mass_kg / t.length_m, t.length_m + t.reel.stored_length_m,
+            ),
         ))  # fmt: skip
     nq = tethers[0].quadrature if tethers else 2  # one for every tether (checked at load)
     model = build_model(
@@ -158,14 +171,23 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
             bodies=kernel_bodies,
             graph=graph,
         )
-    y0, r_ref, v_ref, sides = initial.initial_state(scene, graph, model, mu, eq_model)
+    if reel_phase is None:
+        y0, r_ref, v_ref, sides = initial.initial_state(scene, graph, model, mu, eq_model)
+        if any(t.reel is not None for t in specs):
+            from .deployment import reel_start
+
+            y0 = reel_start(model, y0)
+    else:  # a later phase of a deployment: its state is remapped from the last (tetherlab/deployment.py)
+        first = reel_phase["first"]
+        y0 = np.zeros(model.state.size)
+        r_ref, v_ref, sides = first.ref_r_m, first.ref_v_m_s, first.sides
     holding = None
     if any(t.initial is not None and t.initial.shape == "equilibrium" for t in tethers):
         y0, holding = initial.static_start(scene, root, tethers, specs, effects, central, nq, y0)
     stop_radius = 0.0
     if scene.stop is not None and scene.stop.altitude_m is not None:
         stop_radius = scene.central_body.radius_m + scene.stop.altitude_m
-        if not float(np.linalg.norm(y0[:3])) > stop_radius:
+        if reel_phase is None and not float(np.linalg.norm(y0[:3])) > stop_radius:
             raise SceneError(
                 "stop.altitude", f"an altitude below the root body's initial altitude "
                 f"({float(np.linalg.norm(y0[:3])) - scene.central_body.radius_m:.6g} m)",
@@ -233,6 +255,8 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
         formulation=formulation,
         mu_m3_s2=mu,
         time_element=scene.integrator.time_element,
+        ref_r_m=np.asarray(r_ref, float),
+        ref_v_m_s=np.asarray(v_ref, float),
     )
 
 
@@ -455,7 +479,7 @@ def run_segments(prep: Prepared, plan: SegmentPlan, progress=None, store=None):
     t_last = float(t_out[-1])
     seg_s = plan.length_s if plan.length_s < t_last else t_last
     loop = store.resume if store is not None and store.resume is not None else {
-        "k": 0, "t_a": 0.0, "y_in": prep.y0, "k_out": 0, "budget": prep.max_steps, "sums": {}, "events": [],
+        "k": 0, "t_a": prep.t0_s, "y_in": prep.y0, "k_out": 0, "budget": prep.max_steps, "sums": {}, "events": [],
         "anchors": [],
     }  # fmt: skip
     k, t_a, y_in, k_out, budget = loop["k"], loop["t_a"], loop["y_in"], loop["k_out"], loop["budget"]

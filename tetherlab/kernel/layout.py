@@ -50,16 +50,24 @@ FAIL_NONE = 0
 FAIL_ROD_COLLAPSE = 11   # a rod shortened below H_MIN_STRAIN (length -> 0: the model breaks)
 FAIL_NONFINITE = 12      # a non-finite force or acceleration
 FAIL_SINGULAR = 13       # the reaction system could not be solved
+FAIL_REEL_EMPTY = 14     # the variable rod at a reel reached zero length (retrieved past its end)
 
 FAIL_TEXT = {
     FAIL_ROD_COLLAPSE: "rod collapsed (its length went to zero or below the minimum strain)",
     FAIL_NONFINITE: "non-finite force or acceleration",
     FAIL_SINGULAR: "singular reaction system",
+    FAIL_REEL_EMPTY: "the rod at the reel was retrieved to zero length",
 }
 
 # part kind of each body (bodies/parts.py dispatches every part function on it); the code lives in
 # the BT_RIGID slot, written once by build_model: PART_POINT = 0 (point mass), PART_RIGID = 1
 BT_PART = BT_RIGID; PART_POINT = 0; PART_RIGID = 1  # noqa: E702
+
+# -- reels (tether/reel.py, docs/deployment.md) ---------------------------------------------------
+REEL_LAW_CONSTANT = 1     # L = L0 + v t
+REEL_LAW_EXPONENTIAL = 2  # L = L0 exp(r t)
+REEL_EXIT_CANISTER = 1    # material at rest in the body: a jump of rho L'^2 and the Carnot loss
+REEL_EXIT_DRUM = 2        # material already at rim speed: no jump at the exit
 
 # -- body controls ---------------------------------------------------------------------------------
 CTRL_NONE = 0
