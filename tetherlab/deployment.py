@@ -179,10 +179,10 @@ def p_view(p):
     return ParamView(p)
 
 
-def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True) -> DeploymentResult:
+def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect: int = 0) -> DeploymentResult:
     """Run a scene with reels phase by phase (module docstring).  A failed phase ends the run and
     keeps every output before it; a retrieval of the last rod stops it with the event
-    'reel.<tether>.retrieved'."""
+    'reel.<tether>.retrieved'.  ``defect``: negative controls only (kernel/layout.py DEFECT_*)."""
     from .pipeline import SimulationError, prepare, run_outcome, run_segments, segment_plan
     from .result import Result
     from .tether.reel_diagnostics import REEL_COLUMNS
@@ -210,6 +210,7 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True) -> Dep
         inside = t_out[(t_out > t_a) & (t_out < t_b)]
         times = np.concatenate([[t_a], inside, [t_b]])
         prep = replace(prep, y0=y, t_out=times, t0_s=t_a)
+        p_view(prep.model.p).defect = defect  # 0 in every user run
         p = prep.model.fresh_params()
         res = run_segments(prep, segment_plan(prep, p), progress)
         stats, msg = run_outcome(prep, res, p, 0.0)

@@ -31,6 +31,7 @@ MUT_TE_SECULAR = 7       # the linear time element's rate without Phi d(1/n)/dsi
 DEFECT_NONE = MUT_NONE
 DEFECT_UNROTATED_ATTACHMENT = 21  # the attachment vector used in body axes as if inertial (chain.py)
 DEFECT_NO_CENTRIPETAL = 22        # omega x (omega x rho) dropped from the attachment acceleration
+DEFECT_REEL_RESCALED = 23         # a reel's tether as the peers pay it out: n fixed rods of L(t)/n, no flux (tether/reel.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 

@@ -33,6 +33,7 @@ from ..kernel.layout import (
     BT_INV_M,
     BT_M,
     BT_SIZE,
+    DEFECT_REEL_RESCALED,
     FAIL_REEL_EMPTY,
     H_MUTANT,
     H_NREEL,
@@ -42,6 +43,7 @@ from ..kernel.layout import (
     H_OFF_ROD,
     H_OFF_RSCR,
     H_OFF_SCR,
+    H_OFF_TETH,
     H_ROOT_INV_M,
     H_ROOT_M,
     MUT_DAMPING_SIGN,
@@ -58,6 +60,7 @@ from ..kernel.layout import (
     RL_ROD,
     RL_SIZE,
     RL_SPEED,
+    RL_TETH,
     RS_JUMP,
     RS_KAP,
     RS_L,
@@ -79,6 +82,9 @@ from ..kernel.layout import (
     SR_R2,
     SR_SIZE,
     SR_U,
+    TT_NRODS,
+    TT_ROD0,
+    TT_SIZE,
 )
 from ..kernel.vec3 import dot
 from .rod import SQ3, fail
@@ -125,6 +131,19 @@ def reel_update(t, p):
                 p[H_ROOT_M] = m
                 p[H_ROOT_INV_M] = 1.0 / m
         lam = Ld / l
+        if int(p[H_MUTANT]) == DEFECT_REEL_RESCALED:
+            # the negative control of the momentum gate: every rod L/n and rho L/n, the mass
+            # appearing in place at the local velocity, no flux through the exit
+            tb = int(p[H_OFF_TETH]) + int(p[rb + RL_TETH]) * TT_SIZE
+            n = int(p[tb + TT_NRODS])
+            g0 = int(p[tb + TT_ROD0])
+            for gg in range(g0, g0 + n):
+                p[int(p[H_OFF_ROD]) + gg * RT_SIZE + RT_LU] = L / n
+                p[int(p[H_OFF_ROD]) + gg * RT_SIZE + RT_M] = rho * L / n
+            l = L / n
+            lam = 0.0
+            Ld = 0.0
+            Ldd = 0.0
         p[rs + RS_L] = L
         p[rs + RS_LD] = Ld
         p[rs + RS_LDD] = Ldd
@@ -142,6 +161,9 @@ def reel_rod_load(q, qd, p, i, g, tension_only, energy):
     -(m/4)(1 - xi) E, linear, so its integrals are exact: R_1 = -3 m E/8, R_2 = -m E/8 and the
     moment sqrt3 int xi f = sqrt3 m E/6."""
     rs = int(p[H_OFF_RSCR]) + i * RS_SIZE
+    if int(p[H_MUTANT]) == DEFECT_REEL_RESCALED:
+        p[rs + RS_JUMP] = 0.0
+        return
     rb = int(p[H_OFF_ROD]) + g * RT_SIZE
     sb = int(p[H_OFF_SCR]) + g * SR_SIZE
     lam = p[rs + RS_LAM]
