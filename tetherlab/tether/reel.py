@@ -33,6 +33,7 @@ from ..kernel.layout import (
     BT_INV_M,
     BT_M,
     BT_SIZE,
+    DEFECT_REEL_NO_LDOT,
     DEFECT_REEL_RESCALED,
     FAIL_REEL_EMPTY,
     H_MUTANT,
@@ -189,6 +190,8 @@ def reel_rod_load(q, qd, p, i, g, tension_only, energy):
     uz = p[sb + SR_U + 2]
     eps = p[sb + SR_EPS]
     epsd = p[sb + SR_EPSD] - (1.0 + eps) * lam
+    if int(p[H_MUTANT]) == DEFECT_REEL_NO_LDOT:  # the peers' strain rate (docs/deployment.md 3.3)
+        epsd = p[sb + SR_EPSD]
     damp = p[rb + RT_D]
     if int(p[H_MUTANT]) == MUT_DAMPING_SIGN:
         damp = -damp
