@@ -24,7 +24,7 @@ import pytest
 
 from tetherlab.deployment import _rows, birth_state, simulate_reel
 from tetherlab.errors import SceneError
-from tetherlab.kernel.layout import DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED
+from tetherlab.model.params import DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED
 from tetherlab.pipeline import prepare
 from tetherlab.scene import Scene
 

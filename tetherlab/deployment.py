@@ -97,7 +97,7 @@ def reel_start(model, y0: np.ndarray) -> np.ndarray:
     initial layout made for equal rods, re-cut to the reel's rods (the first at the reel
     shorter; the ends and the strain kept), and the line moving out of the reel at the law's
     speed L'(0)(1 + eps) relative to the rigid motion (no velocity jump at the first instant)."""
-    from .model.params import ParamView
+    from .model.params import REEL_LAW_CONSTANT, ParamView
 
     y = np.array(y0, float)
     lay = model.state
@@ -116,7 +116,7 @@ def reel_start(model, y0: np.ndarray) -> np.ndarray:
             y[lay.rod_rate(g)] = Sd * lengths[g] / L / (2 * SQ3)
         eps = float(np.linalg.norm(S)) / L - 1.0
         u = S / np.linalg.norm(S)
-        speed = rv.speed_m_s if int(rv.law) == 1 else rv.rate_1_s * rv.length0_m
+        speed = rv.speed_m_s if int(rv.law) == REEL_LAW_CONSTANT else rv.rate_1_s * rv.length0_m
         y[lay.rod_rate(sl.start)] += speed * (1.0 + eps) * u / (2 * SQ3)
     return y
 

@@ -343,7 +343,15 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     A run that fails raises :class:`SimulationError` whose ``.result`` keeps every output
     computed before the failure (or, with ``raise_on_failure=False``, returns that result with
     ``result.ok`` false and ``result.message`` saying when, where and why).
+
+    A scene with a reel runs phase by phase between the births and retirements of its rods and
+    returns a :class:`tetherlab.deployment.DeploymentResult` (one Result per phase, the reel's
+    table and the invariants across phases; docs/deployment.md).
     """
+    if any(t.reel is not None for t in scene.tethers):
+        from .deployment import simulate_reel
+
+        return simulate_reel(scene, progress=progress, raise_on_failure=raise_on_failure)
     prep = prepare(scene)
     p = prep.model.fresh_params()
     bar = _ProgressBar(prep.t_out[-1], enabled=progress)
