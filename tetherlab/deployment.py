@@ -183,7 +183,7 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
     """Run a scene with reels phase by phase (module docstring).  A failed phase ends the run and
     keeps every output before it; a retrieval of the last rod stops it with the event
     'reel.<tether>.retrieved'.  ``defect``: negative controls only (kernel/layout.py DEFECT_*)."""
-    from .pipeline import SimulationError, prepare, run_outcome, run_segments, segment_plan
+    from .pipeline import SimulationError, _ProgressBar, prepare, run_outcome, run_segments, segment_plan
     from .result import Result
     from .tether.reel_diagnostics import REEL_COLUMNS
 
@@ -192,6 +192,8 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
     t_out = prep0.t_out
     t_end = float(t_out[-1])
     check_law(scene, t_end)
+    bar = _ProgressBar(t_end, enabled=progress) if not callable(progress) else None
+    update = bar.update if bar is not None else progress
     state = {t.name: t.rods for t in tethers}
     t_a = 0.0
     y = prep0.y0
@@ -212,7 +214,7 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
         prep = replace(prep, y0=y, t_out=times, t0_s=t_a)
         p_view(prep.model.p).defect = defect  # 0 in every user run
         p = prep.model.fresh_params()
-        res = run_segments(prep, segment_plan(prep, p), progress)
+        res = run_segments(prep, segment_plan(prep, p), update)
         stats, msg = run_outcome(prep, res, p, 0.0)
         out, d, _ = _rows(prep.model, res.t, res.y)
         phases.append(Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, msg, p))
@@ -268,6 +270,8 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
         prep = nxt_prep
         t_a = t_b
         ph += 1
+    if bar is not None:
+        bar.close()
     reel_df = pd.concat(reel_parts, ignore_index=True)
     inv_df = pd.concat(inv_parts, ignore_index=True)
     # the energy taken out at the exit, integrated phase by phase (trapezoid on the outputs;
