@@ -135,14 +135,39 @@ def birth_state(lay_old, lay_new, y: np.ndarray, g0: int, l_m: float, la_m: floa
     return _with_rods(lay_old, lay_new, y, g0, 1, [(d_a, dd_a), (d - d_a, dd - dd_a)])
 
 
-def retire_state(lay_old, lay_new, y: np.ndarray, g0: int) -> np.ndarray:
-    """The state after a retirement: the first rod (at the reel) and the next merged into one rod
-    from the reel to the next's far end, with the velocities of both ends kept.  Two rods become
-    one straight rod, so the state changes where the line had a kink at the joint (the momentum
-    and energy it changes are reported by the deployment's invariants; docs/deployment.md 6.2)."""
-    d = y[lay_old.rod(g0)] + y[lay_old.rod(g0 + 1)]
-    dd = y[lay_old.rod_rate(g0)] + y[lay_old.rod_rate(g0 + 1)]
-    return _with_rods(lay_old, lay_new, y, g0, 2, [(d, dd)])
+def retire_state(model_old, lay_new, y: np.ndarray, k: int, rho_kg_m: float, la_m: float, lb_m: float,
+                 speed_m_s: float) -> np.ndarray:
+    """The state after a retirement: the first rod of tether k (length la, at the reel) and the next
+    (lb) merged into one rod of la + lb from the exit to the next's far end B.  Two rods become one
+    straight rod whose material moves with the field (2.1) of docs/deployment.md, so the momentum of
+    their material changes (the transport speed, l' (1 + eps) at the exit, spread over la + lb
+    instead of la) by dP; the velocity of B is changed by delta so that the merged rod and what
+    moves with B (the next rod's near end, or the end body) take -dP back: linear momentum is kept
+    to round-off, angular momentum and energy change (reported by the invariants; section 6.2)."""
+    from .system import point_positions
+
+    lay_old = model_old.state
+    g0 = model_old.rod_slices[k].start
+    n = model_old.rod_slices[k].stop - g0
+    d_a, d_b = y[lay_old.rod(g0)], y[lay_old.rod(g0 + 1)]
+    dd_a, dd_b = y[lay_old.rod_rate(g0)], y[lay_old.rod_rate(g0 + 1)]
+    v_a = point_positions(model_old, y)["jvel"][k][0]
+    k2 = 2 * SQ3
+    m_a, m_b, m = rho_kg_m * la_m, rho_kg_m * lb_m, rho_kg_m * (la_m + lb_m)
+    p_old = m_a * (v_a + k2 * dd_a / 2) + m_a * (speed_m_s / la_m) * k2 * d_a / 2 + m_b * (v_a + k2 * dd_a + k2 * dd_b / 2)
+    d, dd = d_a + d_b, dd_a + dd_b
+    p_new = m * (v_a + k2 * dd / 2) + m * (speed_m_s / (la_m + lb_m)) * k2 * d / 2
+    if n >= 3:  # the next rod's near end moves with B: half its mass
+        beyond = rho_kg_m * lb_m / 2.0  # (every rod but the first is a full rod of lb)
+    else:
+        tip = model_old.tethers[k].tip_mass_kg
+        beyond = tip if tip > 0 else 0.0
+    delta = -(p_new - p_old) / (m / 2.0 + beyond)  # the change of v_B
+    dd = dd + delta / k2
+    z = _with_rods(lay_old, lay_new, y, g0, 2, [(d, dd)])
+    if n >= 3:  # the next rod keeps its far end's velocity
+        z[lay_new.rod_rate(g0 + 1)] -= delta / k2
+    return z
 
 
 def _with_rods(lay_old, lay_new, y, g0, n_out, rods_in) -> np.ndarray:
@@ -265,7 +290,9 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
         if nxt[1] == "birth":
             y = birth_state(lay_old, lay_new, y_end, g0, l_first, l_first - reel.rod_length_m, speed)
         else:
-            y = retire_state(lay_old, lay_new, y_end, g0)
+            k = [x.name for x in prep.model.tethers].index(t.name)
+            rho = t.mass_kg / t.length_m
+            y = retire_state(prep.model, lay_new, y_end, k, rho, l_first, reel.rod_length_m, speed)
         changes.append({"t_s": t_b, "reel": t.name, "change": nxt[1], "rods": n_new})
         prep = nxt_prep
         t_a = t_b
