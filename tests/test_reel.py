@@ -190,6 +190,32 @@ def test_retirements_keep_momentum_to_round_off():
     assert float(np.abs(H - H[0]).max()) <= 0.05 * float(np.linalg.norm(H[0]))
 
 
+def _table_scene(times, lengths, duration="120 s"):
+    data = _free_scene(duration=duration).to_dict()
+    reel = data["tethers"]["main"]["reel"]
+    reel.pop("speed")
+    reel.update(law="table", times=times, lengths=lengths)
+    return Scene.from_dict(data)
+
+
+def test_table_law_out_and_back_keeps_momentum():
+    """A table out to 270 m and back to 200 m (a natural cubic spline through the points): births
+    then a retirement, linear momentum to round-off across all of them, L on the spline."""
+    from scipy.interpolate import CubicSpline
+
+    times, lengths = [0.0, 60.0, 120.0], [150.0, 270.0, 200.0]
+    scene = _table_scene([f"{x} s" for x in times], [f"{x} m" for x in lengths])
+    run = simulate_reel(scene)
+    kinds = [c["change"] for c in run.changes]
+    assert "birth" in kinds and "retire" in kinds, kinds
+    P = _vectors(run.invariants, "momentum")
+    assert float(np.abs(P - P[0]).max()) <= _momentum_budget(run)
+    spline = CubicSpline(times, lengths, bc_type="natural")  # the law's definition (docs/scenes.md)
+    r = run.reel
+    assert np.abs(r["deployed_length_m"] - spline(r["t_s"])).max() <= 1e-9 * 300.0
+    assert np.abs(r["speed_m_s"] - spline(r["t_s"], 1)).max() <= 1e-9 * 3.0
+
+
 BAD_REELS = [
     ({"rod_length": "0 m"}, "tethers.main.reel.rod_length"),
     ({"rod_length": "-5 m"}, "tethers.main.reel.rod_length"),
@@ -203,6 +229,10 @@ BAD_REELS = [
     ({"stored_length": "-1 m"}, "tethers.main.reel.stored_length"),
     ({"law": "exponential"}, "tethers.main.reel.rate"),  # the exponential law without its rate
     ({"spool": "1 kg m2"}, "tethers.main.reel.spool"),
+    ({"law": "table", "times": ["0 s", "0 s"], "lengths": ["150 m", "200 m"]}, "tethers.main.reel.times"),
+    ({"law": "table", "times": ["0 s", "60 s"], "lengths": ["100 m", "200 m"]}, "tethers.main.reel.lengths"),
+    ({"law": "table", "times": ["0 s", "60 s"], "lengths": ["150 m"]}, "tethers.main.reel.lengths"),
+    ({"law": "table", "lengths": ["150 m", "200 m"]}, "tethers.main.reel.times"),
 ]
 
 
@@ -210,7 +240,7 @@ BAD_REELS = [
 def test_bad_reel_keys_name_the_key(change, key):
     data = _free_scene().to_dict()
     data["tethers"]["main"]["reel"].update(change)
-    if change.get("law") == "exponential":
+    if change.get("law") in ("exponential", "table"):
         data["tethers"]["main"]["reel"].pop("speed")
     with pytest.raises(SceneError) as err:
         Scene.from_dict(data)
@@ -221,6 +251,12 @@ def test_speed_law_that_makes_the_length_negative_is_refused():
     with pytest.raises(SceneError) as err:
         simulate_reel(_free_scene(speed="-3 m/s", duration="60 s"))  # L = 150 - 3 t < 0 from 50 s
     assert err.value.key == "tethers.main.reel.speed"
+
+
+def test_table_that_ends_before_the_run_is_refused():
+    with pytest.raises(SceneError) as err:
+        simulate_reel(_table_scene(["0 s", "60 s"], ["150 m", "200 m"]))  # the run lasts 120 s
+    assert err.value.key == "tethers.main.reel.times"
 
 
 def test_law_beyond_the_stored_tether_is_refused():

@@ -24,7 +24,7 @@ import pandas as pd
 
 from . import diagnostics as diag
 from .errors import SceneError
-from .scene.reels import length_at
+from .scene.reels import length_at, speed_at, table_spline
 
 SQ3 = math.sqrt(3.0)
 
@@ -58,8 +58,19 @@ def check_law(scene, duration_s: float) -> None:
     for t in reel_tethers(scene):
         r = t.reel
         path = f"tethers.{t.name}.reel"
-        end = length_at(r, t.length_m, duration_s)
         line = t.length_m + r.stored_length_m
+        if r.law == "table":
+            if r.times_s[-1] < duration_s:
+                raise SceneError(f"{path}.times", f"a table reaching the end of the run ({duration_s:.6g} s)",
+                                 f"a last time of {r.times_s[-1]:.6g} s")  # fmt: skip
+            ts = np.linspace(0.0, duration_s, 20001)
+            ls = table_spline(r)(ts)
+            if not ls.min() > 0.0:
+                raise SceneError(f"{path}.lengths", "lengths whose spline stays positive over the run",
+                                 f"L = {ls.min():.6g} m at t = {ts[ls.argmin()]:.6g} s")  # fmt: skip
+            end = float(ls.max())
+        else:
+            end = length_at(r, t.length_m, duration_s)
         if r.law == "constant" and not end > 0.0:
             when = t.length_m / -r.speed_m_s
             raise SceneError(f"{path}.speed", f"a speed that keeps the deployed length positive over the run "
@@ -78,7 +89,13 @@ def next_change(reel, length0_m: float, rods: int, t_a: float, t_end: float):
     targets.append((fixed + reel.retire_length_m, "retire" if rods > 1 else "retrieved"))
     best = (math.inf, None)
     for target, kind in targets:
-        if reel.law == "constant":
+        if reel.law == "table":
+            roots = [float(x) for x in table_spline(reel).solve(target, extrapolate=True)
+                     if x > t_a * (1.0 + 1e-12) + 1e-9]  # fmt: skip
+            if not roots:
+                continue
+            tc = min(roots)
+        elif reel.law == "constant":
             if reel.speed_m_s == 0.0:
                 continue
             tc = (target - length0_m) / reel.speed_m_s
@@ -97,7 +114,7 @@ def reel_start(model, y0: np.ndarray) -> np.ndarray:
     initial layout made for equal rods, re-cut to the reel's rods (the first at the reel
     shorter; the ends and the strain kept), and the line moving out of the reel at the law's
     speed L'(0)(1 + eps) relative to the rigid motion (no velocity jump at the first instant)."""
-    from .model.params import REEL_LAW_CONSTANT, ParamView
+    from .model.params import REEL_LAW_CONSTANT, REEL_LAW_TABLE, ParamView
 
     y = np.array(y0, float)
     lay = model.state
@@ -116,7 +133,12 @@ def reel_start(model, y0: np.ndarray) -> np.ndarray:
             y[lay.rod_rate(g)] = Sd * lengths[g] / L / (2 * SQ3)
         eps = float(np.linalg.norm(S)) / L - 1.0
         u = S / np.linalg.norm(S)
-        speed = rv.speed_m_s if int(rv.law) == REEL_LAW_CONSTANT else rv.rate_1_s * rv.length0_m
+        if int(rv.law) == REEL_LAW_CONSTANT:
+            speed = rv.speed_m_s
+        elif int(rv.law) == REEL_LAW_TABLE:
+            speed = float(model.p[int(rv.table_offset) + 2])  # a1 of the first interval: L'(0)
+        else:
+            speed = rv.rate_1_s * rv.length0_m
         y[lay.rod_rate(sl.start)] += speed * (1.0 + eps) * u / (2 * SQ3)
     return y
 
@@ -220,6 +242,7 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
     bar = _ProgressBar(t_end, enabled=progress) if not callable(progress) else None
     update = bar.update if bar is not None else progress
     state = {t.name: t.rods for t in tethers}
+    knots = sorted({float(x) for t in tethers if t.reel.law == "table" for x in t.reel.times_s[1:-1]})
     t_a = 0.0
     y = prep0.y0
     prep = prep0
@@ -233,6 +256,10 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
             tc, kind = next_change(t.reel, t.length_m, state[t.name], t_a, t_end)
             if tc < nxt[0]:
                 nxt = (tc, kind, t)
+        # a table law's knots end a phase too, so that no step straddles the jump of L's third derivative
+        knot = min((k for k in knots if k > t_a * (1.0 + 1e-12) + 1e-9), default=math.inf)
+        if knot < nxt[0] and knot < t_end:
+            nxt = (knot, "knot", None)
         t_b = min(nxt[0], t_end)
         inside = t_out[(t_out > t_a) & (t_out < t_b)]
         times = np.concatenate([[t_a], inside, [t_b]])
@@ -266,6 +293,11 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
             break
         if nxt[1] is None or t_b >= t_end:
             break
+        if nxt[1] == "knot":  # the same model goes on from the knot
+            y = res.y_end
+            t_a = t_b
+            ph += 1
+            continue
         # a birth, a retirement, or the last rod retrieved: the phase ends at t_b
         t = nxt[2]
         reel = t.reel
@@ -273,7 +305,7 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
         lay_old = prep.model.state
         g0 = prep.model.rod_slices[[x.name for x in prep.model.tethers].index(t.name)].start
         L = length_at(reel, t.length_m, t_b)
-        speed = reel.speed_m_s if reel.law == "constant" else reel.rate_1_s * L
+        speed = speed_at(reel, t.length_m, t_b)
         if nxt[1] == "retrieved":
             stopped = f"reel.{t.name}.retrieved"
             message = (f"run stopped at t = {t_b:.9g} s: the tether {t.name!r} was retrieved to its last rod's "

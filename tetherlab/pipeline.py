@@ -138,7 +138,7 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
             reversed=graph.tethers[k].reversed,
             reel=None if t.reel is None else ReelSpec(
                 t.reel.law, t.reel.exit, t.length_m, t.reel.speed_m_s, t.reel.rate_1_s, t.reel.rod_length_m,
-                t.mass_kg / t.length_m, t.length_m + t.reel.stored_length_m,
+                t.mass_kg / t.length_m, t.length_m + t.reel.stored_length_m, _reel_table(t.reel),
             ),
         ))  # fmt: skip
     nq = tethers[0].quadrature if tethers else 2  # one for every tether (checked at load)
@@ -258,6 +258,16 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
         ref_r_m=np.asarray(r_ref, float),
         ref_v_m_s=np.asarray(v_ref, float),
     )
+
+
+def _reel_table(reel) -> tuple:
+    """The intervals (t_k, a0, a1, a2, a3) of a table law's spline (tether/reel.py reads them)."""
+    if reel.law != "table":
+        return ()
+    from .scene.reels import table_spline
+
+    sp = table_spline(reel)
+    return tuple((float(sp.x[k]), *(float(sp.c[3 - j, k]) for j in range(4))) for k in range(len(sp.x) - 1))
 
 
 def _event_args(prep) -> dict:

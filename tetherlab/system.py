@@ -40,6 +40,7 @@ class ReelSpec:
     rod_length_m: float
     density_kg_m: float
     line_length_m: float
+    table: tuple = ()  # law "table": per interval (t_k, a0, a1, a2, a3), L = a0 + a1 s + a2 s^2 + a3 s^3
 
 
 @dataclass(frozen=True)
@@ -250,6 +251,7 @@ def build_model(
     )
     reels = [k for k, t in enumerate(tethers) if t.reel is not None]
     dims["n_reels"] = len(reels)
+    dims["n_reel_table_floats"] = sum(5 * len(tethers[k].reel.table) for k in reels)
     offs, length = P.block_offsets(dims)
     p = np.zeros(length)
     P.write_table_offsets(p, offs)
@@ -259,6 +261,13 @@ def build_model(
     v.formulation = P.FORM_COWELL
     v.n_rods = nrods
     v.n_reels = len(reels)
+    tab = v.part_offset("reels", "tables")
+    for i, k in enumerate(reels):  # the table laws' intervals, before anything sizes past them
+        rows = tethers[k].reel.table
+        v.reel(i).table_offset = tab
+        v.reel(i).table_intervals = len(rows)
+        p[tab : tab + 5 * len(rows)] = np.asarray(rows, float).ravel() if rows else []
+        tab += 5 * len(rows)
     v.n_tethers = nteth
     v.root_inv_mass_1_kg = 0.0 if root_fixed else 1.0 / root_mass_kg
     v.root_mass_kg = 0.0 if root_fixed else root_mass_kg
@@ -439,7 +448,7 @@ def _write_reel(v, i: int, k: int, body: int, g0: int, t: TetherSpec, body_mass_
     rv.tether = k
     rv.body = body
     rv.rod = g0
-    rv.law = {"constant": P.REEL_LAW_CONSTANT, "exponential": P.REEL_LAW_EXPONENTIAL}[r.law]
+    rv.law = {"constant": P.REEL_LAW_CONSTANT, "exponential": P.REEL_LAW_EXPONENTIAL, "table": P.REEL_LAW_TABLE}[r.law]
     rv.exit = {"canister": P.REEL_EXIT_CANISTER, "drum": P.REEL_EXIT_DRUM}[r.exit]
     rv.length0_m = r.length0_m
     rv.speed_m_s = r.speed_m_s

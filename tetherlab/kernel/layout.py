@@ -68,6 +68,7 @@ BT_PART = BT_RIGID; PART_POINT = 0; PART_RIGID = 1  # noqa: E702
 # -- reels (tether/reel.py, docs/deployment.md) ---------------------------------------------------
 REEL_LAW_CONSTANT = 1     # L = L0 + v t
 REEL_LAW_EXPONENTIAL = 2  # L = L0 exp(r t)
+REEL_LAW_TABLE = 3        # L(t) a natural cubic spline through a table (C2: L'' continuous)
 REEL_EXIT_CANISTER = 1    # material at rest in the body: a jump of rho L'^2 and the Carnot loss
 REEL_EXIT_DRUM = 2        # material already at rim speed: no jump at the exit
 

@@ -163,6 +163,8 @@ REEL = Record("reel", "RL_", 16, (
     _f("density_kg_m", "RL_RHO", unit="kg/m", doc="line density rho of the tether"),
     _f("body_mass_kg", "RL_MBODY", unit="kg", doc="mass of the carrying body without the stored tether"),
     _f("line_length_m", "RL_LINE", unit="m", doc="whole line: deployed plus stored (stored = line - L)"),
+    _i("table_offset", "RL_TOFF", "table law: offset of its intervals (t_k, then L's cubic coefficients)"),
+    _i("table_intervals", "RL_TN", "table law: number of intervals"),
 ))
 
 EFFECT = Record("effect", "ET_", 4, (
@@ -293,7 +295,8 @@ BLOCK = {
         Table("wheels", (Part("rows", "n_wheels", WHEEL), Part("tables", "n_wheel_table_floats")), offset="H_OFF_WT",
               doc="wheel table, then the time tables of the table-driven wheels"),
         Table("rest", (Part("pairs", "n_rest", width=2),), offset="H_OFF_REST"),
-        Table("reels", (Part("rows", "n_reels", REEL),), offset="H_OFF_REEL"),
+        Table("reels", (Part("rows", "n_reels", REEL), Part("tables", "n_reel_table_floats")), offset="H_OFF_REEL",
+              doc="reel table, then the intervals of the table laws (5 floats each: t_k, a0..a3)"),
     ),
     "scratch": (
         Table("rod_scratch", (Part("rods", "n_rods", ROD_SCRATCH), Part("joints", "n_joints", JOINT_SCRATCH)),
@@ -399,13 +402,13 @@ def layout_constants(block: dict = BLOCK, records: tuple = RECORDS) -> dict:
 
 
 def dims_of(*, n_rods, n_tethers, n_bodies, n_wheels, n_effects, n_effect_pars, n_quadrature, n_roots, n_rest,
-            n_wheel_table_floats, n_reels=0) -> dict:
+            n_wheel_table_floats, n_reels=0, n_reel_table_floats=0) -> dict:
     """The model dimensions the tables are sized by (``n_joints`` follows: n + 1 joints per tether)."""
     return {
         "n_rods": n_rods, "n_tethers": n_tethers, "n_bodies": n_bodies, "n_wheels": n_wheels,
         "n_effects": n_effects, "n_effect_pars": n_effect_pars, "n_quadrature": n_quadrature, "n_roots": n_roots,
         "n_rest": n_rest, "n_wheel_table_floats": n_wheel_table_floats, "n_joints": n_rods + n_tethers,
-        "n_reels": n_reels,
+        "n_reels": n_reels, "n_reel_table_floats": n_reel_table_floats,
     }
 
 

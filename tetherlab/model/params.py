@@ -172,7 +172,7 @@ class ParamView(_Header):
             n_effects=self.n_effects, n_effect_pars=sum(e.n_par for e in self.effects), n_quadrature=self.n_quadrature,
             n_roots=self.n_roots, n_rest=self.n_rest,
             n_wheel_table_floats=sum(2 * w.table_points for w in self.wheels if w.mode == WMODE_TABLE),  # noqa: F821
-            n_reels=self.n_reels,
+            n_reels=self.n_reels, n_reel_table_floats=sum(5 * r.table_intervals for r in self.reels),
         )
 
     def part_offset(self, table: str, part: str) -> int:

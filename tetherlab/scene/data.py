@@ -185,7 +185,7 @@ class InitialShape:
         return tuple(self.theta_rad), tuple(self.phi_rad)
 
 
-REEL_LAWS = ("constant", "exponential")
+REEL_LAWS = ("constant", "exponential", "table")
 REEL_EXITS = ("canister", "drum")
 
 
@@ -205,6 +205,8 @@ class Reel:
     birth_length_m: float = 0.0
     retire_length_m: float = 0.0
     stored_length_m: float = 0.0  # tether still on the reel at t = 0
+    times_s: tuple = ()  # law 'table': times from 0, increasing
+    lengths_m: tuple = ()  # law 'table': L at those times (a natural cubic spline between them)
 
 
 @dataclass(frozen=True)

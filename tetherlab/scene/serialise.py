@@ -171,8 +171,11 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
                                  "stored_length": format_si(r.stored_length_m, LENGTH)}  # fmt: skip
                 if r.law == "constant":
                     entry["reel"]["speed"] = format_si(r.speed_m_s, SPEED)
-                else:
+                elif r.law == "exponential":
                     entry["reel"]["rate"] = format_si(r.rate_1_s, RATE)
+                else:
+                    entry["reel"]["times"] = [format_si(x, TIME) for x in r.times_s]
+                    entry["reel"]["lengths"] = [format_si(x, LENGTH) for x in r.lengths_m]
             # A default shape is left out: it reads back the same, and a sweep that later places
             # both ends explicitly is not tripped by a shape nobody asked for.
             if t.initial is not None and t.initial != InitialShape():

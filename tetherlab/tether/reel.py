@@ -50,6 +50,7 @@ from ..kernel.layout import (
     MUT_DAMPING_SIGN,
     REEL_LAW_CONSTANT,
     REEL_LAW_EXPONENTIAL,
+    REEL_LAW_TABLE,
     RL_BODY,
     RL_FIXED,
     RL_L0,
@@ -62,6 +63,8 @@ from ..kernel.layout import (
     RL_SIZE,
     RL_SPEED,
     RL_TETH,
+    RL_TN,
+    RL_TOFF,
     RS_JUMP,
     RS_KAP,
     RS_L,
@@ -103,6 +106,21 @@ def reel_law(p, rb, t):
     if law == REEL_LAW_CONSTANT:
         v = p[rb + RL_SPEED]
         return l0 + v * t, v, 0.0
+    if law == REEL_LAW_TABLE:
+        # the interval k with t_k <= t (the first before the table, the last after it); each holds
+        # t_k and L = a0 + a1 s + a2 s^2 + a3 s^3, s = t - t_k
+        off = int(p[rb + RL_TOFF])
+        n = int(p[rb + RL_TN])
+        k = 0
+        while k + 1 < n and p[off + 5 * (k + 1)] <= t:
+            k += 1
+        b = off + 5 * k
+        s = t - p[b]
+        a0 = p[b + 1]
+        a1 = p[b + 2]
+        a2 = p[b + 3]
+        a3 = p[b + 4]
+        return a0 + s * (a1 + s * (a2 + s * a3)), a1 + s * (2.0 * a2 + 3.0 * s * a3), 2.0 * a2 + 6.0 * s * a3
     return l0, 0.0, 0.0
 
 
