@@ -33,7 +33,6 @@ from .data import (
     InitialShape,
     Tether,
 )
-from .reels import parse_reel, rods_for
 from .keys import (
     _NOTHING,
     _choice,
@@ -47,6 +46,7 @@ from .keys import (
     _table,
     _vector,
 )
+from .reels import parse_reel, rods_for
 
 
 _TETHER_KEYS = (
