@@ -24,7 +24,7 @@ import pytest
 
 from tetherlab.deployment import _rows, birth_state, simulate_reel
 from tetherlab.errors import SceneError
-from tetherlab.model.params import DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED
+from tetherlab.model.params import DEFECT_REEL_FROZEN, DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED
 from tetherlab.pipeline import prepare
 from tetherlab.scene import Scene
 
@@ -334,3 +334,58 @@ def test_strain_rate_without_its_ldot_term_fails_the_deployment_gate():
     if run.ok:  # the damping brakes the line with D c Omega ~ 0.4 N against a tension of 3 to 19 mN
         th_ratio, t_ratio, _ = _angle_and_tension_errors(run, om, theta, m_red)
         assert t_ratio.max() > 10.0
+
+
+# -- slow retrieval: the libration amplitude as an adiabatic invariant (docs/deployment.md 7c) --------
+A_RETR = 7000e3
+C_RETR = -0.02  # l'/(l Omega): exponential retrieval, 10 km -> 5.3 km in 5 orbits
+A0_RETR = math.radians(5.0)
+
+
+def _retrieval_run(defect=0):
+    om = math.sqrt(MU / A_RETR**3)
+    th_s = 0.5 * math.asin(-4.0 * C_RETR / 3.0)  # the steady angle the oscillation is about (section 7)
+    m_red = M_ST * M_SUB / (M_ST + M_SUB)
+    scene = Scene.from_dict({
+        "name": "retrieval", "duration": "5 orbits", "effects": {"central_gravity": {}},
+        "bodies": {"m0": {"mass": f"{M_ST} kg"}, "mf": {"mass": f"{M_SUB} kg"}},
+        "orbit": {"reference": "center_of_mass", "motion": "corotating", "elements": {
+            "a": f"{A_RETR / 1e3} km", "e": 0.0, "i": "0 deg", "raan": "0 deg", "argp": "0 deg", "nu": "0 deg"}},
+        "tethers": {"main": {
+            "from": "m0", "to": "mf", "length": "10 km", "EA": "1e4 N", "linear_density": f"{RHO} kg/m",
+            "damping": "3e4 N s", "model": "energy",
+            "initial": {"shape": "straight", "theta": f"{math.degrees(th_s + A0_RETR)} deg",
+                        "strain": m_red * om**2 * 1e4 * 3.0 / 1e4},
+            "reel": {"law": "exponential", "rate": f"{C_RETR * om} 1/s", "rod_length": "2 km",
+                     "stored_length": "1 km"}}},
+        "integrator": {"method": "radau5", "rtol": 1e-9, "atol": 1e-9},
+        "output": {"count": 2001},
+    })  # fmt: skip
+    import pandas as pd
+
+    run = simulate_reel(scene, defect=defect)
+    dg = pd.concat([ph.diagnostics[["t_s", "main.theta_rad"]] for ph in run.phases], ignore_index=True)
+    keep = ~dg["t_s"].duplicated().to_numpy()  # a phase's first row repeats the last one's
+    x = np.abs(dg["main.theta_rad"].to_numpy()[keep] - th_s)
+    L = run.reel["deployed_length_m"].to_numpy()[keep]
+    peaks = [i for i in range(1, len(x) - 1) if x[i] >= x[i - 1] and x[i] > x[i + 1]]
+    return np.array([x[i] * L[i] / (A0_RETR * 1e4) for i in peaks]), L[peaks], run
+
+
+@pytest.mark.slow
+def test_slow_retrieval_amplitude_grows_as_one_over_length():
+    """Retrieval at l'/l = -0.02 Omega: the libration's action ~ m* l^2 A^2 sqrt3 Omega is an
+    adiabatic invariant, so A l stays A0 l0 (issue oracle 2).  Budget: the adiabatic parameter
+    |c|/sqrt3 = 0.012 (the invariant's oscillating error is of that order), the amplitude's
+    nonlinearity A^2/8 = 0.003 at 9 deg, the field beyond the gravity gradient 4 l/a = 0.006
+    (section 7): 0.021."""
+    ratio, L, run = _retrieval_run()
+    assert [c["change"] for c in run.changes] == ["retire", "retire"]
+    assert len(ratio) >= 15 and L[-1] < 0.6e4  # every half libration from 10 km down to 5.6 km
+    assert np.abs(ratio - 1.0).max() <= 0.021, ratio
+
+
+@pytest.mark.slow
+def test_a_reel_whose_law_the_kernel_ignores_fails_the_retrieval_gate():
+    ratio, _, _ = _retrieval_run(defect=DEFECT_REEL_FROZEN)
+    assert np.abs(ratio - 1.0).max() > 0.1

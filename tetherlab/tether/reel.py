@@ -33,6 +33,7 @@ from ..kernel.layout import (
     BT_INV_M,
     BT_M,
     BT_SIZE,
+    DEFECT_REEL_FROZEN,
     DEFECT_REEL_NO_LDOT,
     DEFECT_REEL_RESCALED,
     FAIL_REEL_EMPTY,
@@ -99,6 +100,8 @@ def reel_law(p, rb, t):
     """(L, L', L'') of the reel whose record starts at rb, at time t."""
     law = int(p[rb + RL_LAW])
     l0 = p[rb + RL_L0]
+    if int(p[H_MUTANT]) == DEFECT_REEL_FROZEN:  # the negative control of the retrieval gate
+        return l0, 0.0, 0.0
     if law == REEL_LAW_EXPONENTIAL:
         r = p[rb + RL_RATE]
         e = l0 * math.exp(r * t)
