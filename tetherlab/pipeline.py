@@ -26,6 +26,7 @@ from .system import (
     BodySpec,
     ControlSpec,
     Model,
+    ReelSpec,
     RigidSpec,
     TetherSpec,
     WheelSpec,
@@ -67,7 +68,11 @@ class Prepared:
     time_element: str = "none"  # DROMO sigma form: "none" (tau) or "linear" (scene.IntegratorSpec)
     # every corner and jump of the time tables: the steps land on them (docs/integrators.md 14)
     breaks_s: tuple = ()
-    t0_s: float = 0.0  # the start time: 0, or the end of the run the scene continues (continue_from)
+    # the start time: 0, the end of the run the scene continues (continue_from), or the start of a
+    # phase of a deployment (tetherlab/deployment.py)
+    t0_s: float = 0.0
+    ref_r_m: np.ndarray | None = None  # the reference state the orbit scales came from
+    ref_v_m_s: np.ndarray | None = None
 
 
 def _body_spec(body) -> BodySpec:
@@ -94,9 +99,13 @@ def _body_spec(body) -> BodySpec:
     return BodySpec(body.name, body.mass_kg, bool(body.fixed), RigidSpec(r.inertia_kg_m2, tuple(wheels), control))
 
 
-def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
+def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: dict | None = None) -> Prepared:
     """Build the model and initial state.  First checks that the run fits the machine
-    (tetherlab/resources.py): all outputs in memory (``simulate``), or streamed to ``out_dir``."""
+    (tetherlab/resources.py): all outputs in memory (``simulate``), or streamed to ``out_dir``.
+
+    ``reel_phase``: a later phase of a deployment after births or retirements
+    (tetherlab/deployment.py): {"rods": {tether name: (rods, deployed length in m)}, "first": the
+    Prepared of the run's first phase (its reference orbit)}; the state is left to the caller."""
     from .resources import check_scene
 
     check_scene(scene, outputs_in_memory=outputs_in_memory, out_dir=out_dir)
@@ -122,10 +131,11 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
     for k, t in enumerate(tethers):
         a_pt = t.from_point_m or zero
         b_pt = t.to_point_m or zero
+        rods, length_m = (reel_phase or {"rods": {}})["rods"].get(t.name, (t.rods, t.length_m))
         specs.append(TetherSpec(
             name=t.name,
-            rods=t.rods,
-            length_m=t.length_m,
+            rods=rods,
+            length_m=length_m,
             ea_n=t.EA_N,
             mass_kg=t.mass_kg,
             damping_n_s=t.damping_N_s,
@@ -138,6 +148,10 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
             from_point_m=tuple(b_pt if graph.tethers[k].reversed else a_pt),
             to_point_m=tuple(a_pt if graph.tethers[k].reversed else b_pt),
             reversed=graph.tethers[k].reversed,
+            reel=None if t.reel is None else ReelSpec(
+                t.reel.law, t.reel.exit, t.length_m, t.reel.speed_m_s, t.reel.rate_1_s, t.reel.rod_length_m,
+                t.mass_kg / t.length_m, t.length_m + t.reel.stored_length_m, _reel_table(t.reel),
+            ),
         ))  # fmt: skip
     nq = tethers[0].quadrature if tethers else 2  # one for every tether (checked at load)
     model = build_model(
@@ -169,7 +183,16 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
             bodies=kernel_bodies,
             graph=graph,
         )
-    y0, r_ref, v_ref, sides = initial.initial_state(scene, graph, model, mu, eq_model)
+    if reel_phase is None:
+        y0, r_ref, v_ref, sides = initial.initial_state(scene, graph, model, mu, eq_model)
+        if any(t.reel is not None for t in specs):
+            from .deployment import reel_start
+
+            y0 = reel_start(model, y0)
+    else:  # a later phase of a deployment: its state is remapped from the last (tetherlab/deployment.py)
+        first = reel_phase["first"]
+        y0 = np.zeros(model.state.size)
+        r_ref, v_ref, sides = first.ref_r_m, first.ref_v_m_s, first.sides
     holding = None
     if any(t.initial is not None and t.initial.shape == "equilibrium" for t in tethers):
         y0, holding = initial.static_start(scene, root, tethers, specs, effects, central, nq, y0)
@@ -181,7 +204,7 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
     stop_radius = 0.0
     if scene.stop is not None and scene.stop.altitude_m is not None:
         stop_radius = scene.central_body.radius_m + scene.stop.altitude_m
-        if not float(np.linalg.norm(y0[:3])) > stop_radius:
+        if reel_phase is None and not float(np.linalg.norm(y0[:3])) > stop_radius:
             raise SceneError(
                 "stop.altitude", f"an altitude below the root body's initial altitude "
                 f"({float(np.linalg.norm(y0[:3])) - scene.central_body.radius_m:.6g} m)",
@@ -266,7 +289,19 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None) -> Prepared:
         time_element=scene.integrator.time_element,
         breaks_s=tuple(model.breakpoints_s().tolist()),
         t0_s=t0,
+        ref_r_m=np.asarray(r_ref, float),
+        ref_v_m_s=np.asarray(v_ref, float),
     )
+
+
+def _reel_table(reel) -> tuple:
+    """The intervals (t_k, a0, a1, a2, a3) of a table law's spline (tether/reel.py reads them)."""
+    if reel.law != "table":
+        return ()
+    from .scene.reels import table_spline
+
+    sp = table_spline(reel)
+    return tuple((float(sp.x[k]), *(float(sp.c[3 - j, k]) for j in range(4))) for k in range(len(sp.x) - 1))
 
 
 def _event_args(prep) -> dict:
@@ -352,6 +387,10 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
     A run that fails raises :class:`SimulationError` whose ``.result`` keeps every output
     computed before the failure (or, with ``raise_on_failure=False``, returns that result with
     ``result.ok`` false and ``result.message`` saying when, where and why).
+
+    A scene with a reel runs phase by phase between the births and retirements of its rods and
+    returns a :class:`tetherlab.deployment.DeploymentResult` (one Result per phase, the reel's
+    table and the invariants across phases; docs/deployment.md).
     """
     from .scene import Scene
 
@@ -360,6 +399,10 @@ def simulate(scene, *, progress: bool | None = None, raise_on_failure: bool = Tr
                 else " (a dictionary: build it with tetherlab.Scene.from_dict(d))" if isinstance(scene, dict) else "")
         raise TypeError(f"simulate(scene): expected a tetherlab.Scene, from tetherlab.load_scene(path) or "
                         f"tetherlab.Scene.from_dict(d); got {type(scene).__name__} {scene!r:.60}{hint}")  # fmt: skip
+    if any(t.reel is not None for t in scene.tethers):
+        from .deployment import simulate_reel
+
+        return simulate_reel(scene, progress=progress, raise_on_failure=raise_on_failure)
     prep = prepare(scene)
     p = prep.model.fresh_params()
     bar = _ProgressBar(prep.t_out[-1], enabled=progress)

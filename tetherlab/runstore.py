@@ -281,6 +281,12 @@ def run_to_dir(scene, out_dir, *, progress=None, checkpoint_s: float = 5.0, part
                 f"`tetherlab run --resume {out}`, or choose another --out"
             )
     check_writable(out)
+    for t in scene.tethers:
+        if t.reel is not None:  # its phases change the model the store writes (docs/deployment.md 9)
+            from .errors import SceneError
+
+            raise SceneError(f"tethers.{t.name}.reel", "a scene without a reel for a run written as it goes (a "
+                             "deployment is run phase by phase: tetherlab.simulate(scene))", "a reel")  # fmt: skip
     prep = prepare(scene, outputs_in_memory=False, out_dir=out)
     if not _streamable(prep):  # integrated in memory, written at the end
         from .resources import check_scene

@@ -29,6 +29,24 @@ MIN_STRAIN = -0.9
 
 
 @dataclass(frozen=True)
+class ReelSpec:
+    """A reel paying a tether out at its end A_1 (SI; docs/deployment.md).  The law gives the
+    deployed unstretched length L(t) from ``length0_m`` at t = 0; ``line_length_m`` is deployed
+    plus stored at t = 0.  The tether's first rod has length L(t) minus its other rods', each of
+    ``rod_length_m``."""
+
+    law: str  # "constant" | "exponential"
+    exit: str  # "canister" | "drum"
+    length0_m: float
+    speed_m_s: float
+    rate_1_s: float
+    rod_length_m: float
+    density_kg_m: float
+    line_length_m: float
+    table: tuple = ()  # law "table": per interval (t_k, a0, a1, a2, a3), L = a0 + a1 s + a2 s^2 + a3 s^3
+
+
+@dataclass(frozen=True)
 class TetherSpec:
     """One tether in SI units (already validated by the scene layer)."""
 
@@ -48,6 +66,9 @@ class TetherSpec:
     to_point_m: tuple = (0.0, 0.0, 0.0)  # attachment of B_n on the child, body axes (rigid)
     reversed: bool = False  # the scene writes it child -> parent: outputs flip it back
     part: str = ""  # its part type (tether/registry.py); "": the rod chain
+    # a reel at A_1: length_m is then the deployed length at the model's start, the first rod
+    # takes what the others (of reel.rod_length_m each) leave of it
+    reel: ReelSpec | None = None
 
 
 @dataclass(frozen=True)
@@ -241,6 +262,9 @@ def build_model(
         n_effect_pars=sum(len(x) for x in eff_params), n_quadrature=quadrature, n_roots=len(roots), n_rest=n_rest,
         n_wheel_table_floats=wheel_table_floats,
     )
+    reels = [k for k, t in enumerate(tethers) if t.reel is not None]
+    dims["n_reels"] = len(reels)
+    dims["n_reel_table_floats"] = sum(5 * len(tethers[k].reel.table) for k in reels)
     offs, length = P.block_offsets(dims)
     p = np.zeros(length)
     P.write_table_offsets(p, offs)
@@ -249,6 +273,14 @@ def build_model(
     v.n_state = state.size
     v.formulation = P.FORM_COWELL
     v.n_rods = nrods
+    v.n_reels = len(reels)
+    tab = v.part_offset("reels", "tables")
+    for i, k in enumerate(reels):  # the table laws' intervals, before anything sizes past them
+        rows = tethers[k].reel.table
+        v.reel(i).table_offset = tab
+        v.reel(i).table_intervals = len(rows)
+        p[tab : tab + 5 * len(rows)] = np.asarray(rows, float).ravel() if rows else []
+        tab += 5 * len(rows)
     v.n_tethers = nteth
     v.root_inv_mass_1_kg = 0.0 if root_fixed else 1.0 / root_mass_kg
     v.root_mass_kg = 0.0 if root_fixed else root_mass_kg
@@ -304,11 +336,18 @@ def build_model(
         tv.parent_point_m = t.from_point_m
         tv.part = tether_part_of(t).code  # the TT_PART slot the tether dispatcher reads
         rod_slices.append(slice(g, g + t.rods))
-        for _ in range(t.rods):
+        if t.reel is not None:
+            _write_reel(v, reels.index(k), k, index[t.parent], g, t, bodies[index[t.parent]].mass_kg)
+        for j in range(t.rods):
             rv = v.rod(g)
-            # equal rods: each has L_u/n and m_t/n (paper section 2.2 allows any split)
-            rv.mass_kg = t.mass_kg / t.rods
-            rv.length_m = t.length_m / t.rods
+            if t.reel is not None:  # the first rod varies, the others are full rods (docs/deployment.md)
+                lj = t.length_m - (t.rods - 1) * t.reel.rod_length_m if j == 0 else t.reel.rod_length_m
+                rv.mass_kg = t.reel.density_kg_m * lj
+                rv.length_m = lj
+            else:
+                # equal rods: each has L_u/n and m_t/n (paper section 2.2 allows any split)
+                rv.mass_kg = t.mass_kg / t.rods
+                rv.length_m = t.length_m / t.rods
             rv.ea_N = t.ea_n
             rv.damping_N_s = t.damping_n_s
             rv.tether = k
@@ -333,6 +372,14 @@ def build_model(
         fixed = body.fixed or not body.mass_kg > 0
         bv.mass_kg = 0.0 if fixed else body.mass_kg
         bv.inv_mass_1_kg = 0.0 if fixed else 1.0 / body.mass_kg
+        for k in reels:  # the stored tether is part of its body's mass (tether/reel.py keeps it so)
+            t = tethers[k]
+            if t.parent == body.name and not fixed:
+                bv.mass_kg = body.mass_kg + t.reel.density_kg_m * (t.reel.line_length_m - t.length_m)
+                bv.inv_mass_1_kg = 1.0 / bv.mass_kg
+                if b == 0:
+                    v.root_mass_kg = bv.mass_kg
+                    v.root_inv_mass_1_kg = bv.inv_mass_1_kg
         bv.qtrans_index = state.root_offset(b) if b == 0 or b > nteth else -1
         bv.parent = parent_tether.get(b, -1)
         bv.attitude_index = -1
@@ -401,6 +448,25 @@ def build_model(
     )
     model.state = state
     return model
+
+
+def _write_reel(v, i: int, k: int, body: int, g0: int, t: TetherSpec, body_mass_kg: float) -> None:
+    """Reel i's row of the block (tether/reel.py reads it every evaluation)."""
+    r = t.reel
+    rv = v.reel(i)
+    rv.tether = k
+    rv.body = body
+    rv.rod = g0
+    rv.law = {"constant": P.REEL_LAW_CONSTANT, "exponential": P.REEL_LAW_EXPONENTIAL, "table": P.REEL_LAW_TABLE}[r.law]
+    rv.exit = {"canister": P.REEL_EXIT_CANISTER, "drum": P.REEL_EXIT_DRUM}[r.exit]
+    rv.length0_m = r.length0_m
+    rv.speed_m_s = r.speed_m_s
+    rv.rate_1_s = r.rate_1_s
+    rv.fixed_length_m = (t.rods - 1) * r.rod_length_m
+    rv.density_kg_m = r.density_kg_m
+    rv.body_mass_kg = body_mass_kg
+    rv.line_length_m = r.line_length_m
+    v.tether(k).reel = i + 1
 
 
 def _with_parent(t: TetherSpec, parent: str) -> TetherSpec:

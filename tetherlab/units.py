@@ -64,6 +64,7 @@ DIMENSIONLESS = Kind("", "a number", "0.5")
 MOMENT_OF_INERTIA = Kind("kg m2", "a moment of inertia", "400 kg m2")
 ANGULAR_RATE = Kind("rad / s", "an angular rate in rad/s, deg/s, rpm, rev/min or rev/s", "500 rpm")
 TORQUE = Kind("N m", "a torque", "0.05 N m")
+RATE = Kind("1 / s", "a rate (per unit time)", "2e-4 1/s")
 ANGULAR_MOMENTUM = Kind("N m s", "an angular momentum (torque x time)", "20 N m s")
 
 _KNOWN_KINDS = (

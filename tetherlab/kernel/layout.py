@@ -31,6 +31,9 @@ MUT_TE_SECULAR = 7       # the linear time element's rate without Phi d(1/n)/dsi
 DEFECT_NONE = MUT_NONE
 DEFECT_UNROTATED_ATTACHMENT = 21  # the attachment vector used in body axes as if inertial (chain.py)
 DEFECT_NO_CENTRIPETAL = 22        # omega x (omega x rho) dropped from the attachment acceleration
+DEFECT_REEL_RESCALED = 23         # a reel's tether as the peers pay it out: n fixed rods of L(t)/n, no flux (tether/reel.py)
+DEFECT_REEL_NO_LDOT = 24          # the strain rate of the rod at a reel without its l' term (tether/reel.py)
+DEFECT_REEL_FROZEN = 25           # the kernel ignores the reel's law: L stays L0 (tether/reel.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 
@@ -50,16 +53,25 @@ FAIL_NONE = 0
 FAIL_ROD_COLLAPSE = 11   # a rod shortened below H_MIN_STRAIN (length -> 0: the model breaks)
 FAIL_NONFINITE = 12      # a non-finite force or acceleration
 FAIL_SINGULAR = 13       # the reaction system could not be solved
+FAIL_REEL_EMPTY = 14     # the variable rod at a reel reached zero length (retrieved past its end)
 
 FAIL_TEXT = {
     FAIL_ROD_COLLAPSE: "rod collapsed (its length went to zero or below the minimum strain)",
     FAIL_NONFINITE: "non-finite force or acceleration",
     FAIL_SINGULAR: "singular reaction system",
+    FAIL_REEL_EMPTY: "the rod at the reel was retrieved to zero length",
 }
 
 # part kind of each body (bodies/parts.py dispatches every part function on it); the code lives in
 # the BT_RIGID slot, written once by build_model from the part table bodies/registry.py
 BT_PART = BT_RIGID
+
+# -- reels (tether/reel.py, docs/deployment.md) ---------------------------------------------------
+REEL_LAW_CONSTANT = 1     # L = L0 + v t
+REEL_LAW_EXPONENTIAL = 2  # L = L0 exp(r t)
+REEL_LAW_TABLE = 3        # L(t) a natural cubic spline through a table (C2: L'' continuous)
+REEL_EXIT_CANISTER = 1    # material at rest in the body: a jump of rho L'^2 and the Carnot loss
+REEL_EXIT_DRUM = 2        # material already at rim speed: no jump at the exit
 
 # -- body controls ---------------------------------------------------------------------------------
 CTRL_NONE = 0

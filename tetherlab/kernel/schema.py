@@ -97,7 +97,7 @@ def _i(name, const, doc="", count=1):
 
 
 # -- records ---------------------------------------------------------------------------------------
-TETHER = Record("tether", "TT_", 12, (
+TETHER = Record("tether", "TT_", 13, (
     _i("n_rods", "TT_NRODS", "rods in this tether"),
     _i("rod0", "TT_ROD0", "global index of its first rod"),
     _f("tip_inv_mass_1_kg", "TT_TIP_INV_M", unit="1/kg", doc="1/mf of the tip body"),
@@ -108,6 +108,7 @@ TETHER = Record("tether", "TT_", 12, (
     _i("child", "TT_CHILD", "body index at end B_n (-1: free end)"),
     _f("parent_point_m", "TT_PA", 3, "m", "attachment point of A_1 on the parent, body axes (zero on a point mass)"),
     _i("part", "TT_PART", "its part kind (tether/registry.py; the dispatcher tether/parts.py reads it)"),
+    _i("reel", "TT_REEL", "1 + index of the reel paying it out at A_1 (0: none; tether/reel.py)"),
 ))
 
 BODY = Record("body", "BT_", 40, (
@@ -151,6 +152,23 @@ ROD = Record("rod", "RT_", 8, (
     _f("ea_N", "RT_EA", unit="N", doc="axial stiffness EA"),
     _f("damping_N_s", "RT_D", unit="N s", doc="damping D of T = EA*eps + D*deps/dt, paper eq. 1"),
     _i("tether", "RT_TETH", "tether index"),
+))
+
+REEL = Record("reel", "RL_", 16, (
+    _i("tether", "RL_TETH", "tether it pays out (at its end A_1)"),
+    _i("body", "RL_BODY", "body carrying it (kernel order): the tether's parent"),
+    _i("rod", "RL_ROD", "global index of the variable rod next to the reel (the tether's first)"),
+    _i("law", "RL_LAW", "REEL_LAW_*: how the deployed length L(t) is prescribed"),
+    _i("exit", "RL_EXIT", "REEL_EXIT_*: drum (no jump) or canister (material at rest, Carnot loss)"),
+    _f("length0_m", "RL_L0", unit="m", doc="deployed unstretched length L at t = 0 (the law's origin)"),
+    _f("speed_m_s", "RL_SPEED", unit="m/s", doc="constant law: dL/dt"),
+    _f("rate_1_s", "RL_RATE", unit="1/s", doc="exponential law: L = L0 exp(rate t)"),
+    _f("fixed_length_m", "RL_FIXED", unit="m", doc="unstretched length of the tether's other rods"),
+    _f("density_kg_m", "RL_RHO", unit="kg/m", doc="line density rho of the tether"),
+    _f("body_mass_kg", "RL_MBODY", unit="kg", doc="mass of the carrying body without the stored tether"),
+    _f("line_length_m", "RL_LINE", unit="m", doc="whole line: deployed plus stored (stored = line - L)"),
+    _i("table_offset", "RL_TOFF", "table law: offset of its intervals (t_k, then L's cubic coefficients)"),
+    _i("table_intervals", "RL_TN", "table law: number of intervals"),
 ))
 
 EFFECT = Record("effect", "ET_", 4, (
@@ -198,7 +216,18 @@ JOINT_SCRATCH = Record("joint_scratch", "SJ_", 15, (
     _f("sinv", "SJ_SINV", 9), _f("s", "SJ_S", 3), _f("j_N", "SJ_J", 3, "N", "joint reaction"),
 ))
 
-RECORDS = (TETHER, BODY, WHEEL, ROD, EFFECT, BODY_SCRATCH, TETHER_SCRATCH, WHEEL_SCRATCH, ROD_SCRATCH, JOINT_SCRATCH)
+REEL_SCRATCH = Record("reel_scratch", "RS_", 8, (
+    _f("length_m", "RS_L", unit="m", doc="deployed unstretched length L(t)"),
+    _f("speed_m_s", "RS_LD", unit="m/s", doc="dL/dt"),
+    _f("accel_m_s2", "RS_LDD", unit="m/s^2", doc="d2L/dt2"),
+    _f("rod_length_m", "RS_LROD", unit="m", doc="unstretched length l of the variable rod"),
+    _f("lambda_1_s", "RS_LAM", unit="1/s", doc="dl/dt / l"),
+    _f("kappa_1_s2", "RS_KAP", unit="1/s^2", doc="d(lambda)/dt - lambda^2 = l''/l - 2 (l'/l)^2"),
+    _f("jump_N", "RS_JUMP", unit="N", doc="momentum flux through the exit, rho L'^2 (1 + eps)"),
+))
+
+RECORDS = (TETHER, BODY, WHEEL, ROD, EFFECT, REEL, BODY_SCRATCH, TETHER_SCRATCH, WHEEL_SCRATCH, ROD_SCRATCH,
+           JOINT_SCRATCH, REEL_SCRATCH)
 
 # -- the block, region by region ---------------------------------------------------------------------
 BLOCK = {
@@ -261,6 +290,9 @@ BLOCK = {
         _i("rest_offset", "H_OFF_REST", "offset of the other effects' (code, parameter offset) pairs"),
         _i("rod_scratch_offset", "H_OFF_SCR", "offset of the rod scratch, then the joint scratch"),
         _i("body_scratch_offset", "H_OFF_BSCR", "offset of the body scratch, then tether, wheel, a 6x6 area"),
+        _i("n_reels", "H_NREEL", "number of reels (tethers of varying length; tether/reel.py)"),
+        _i("reels_offset", "H_OFF_REEL", "offset of the reel table"),
+        _i("reel_scratch_offset", "H_OFF_RSCR", "offset of the reel scratch"),
         Table("effects", (Part("rows", "n_effects", EFFECT), Part("pars", "n_effect_pars")), offset="H_OFF_EFF",
               doc="effect table, then every effect's own parameters"),
         Table("tethers", (Part("rows", "n_tethers", TETHER),), offset="H_OFF_TETH"),
@@ -273,6 +305,8 @@ BLOCK = {
         Table("wheels", (Part("rows", "n_wheels", WHEEL), Part("tables", "n_wheel_table_floats")), offset="H_OFF_WT",
               doc="wheel table, then the time tables of the table-driven wheels"),
         Table("rest", (Part("pairs", "n_rest", width=2),), offset="H_OFF_REST"),
+        Table("reels", (Part("rows", "n_reels", REEL), Part("tables", "n_reel_table_floats")), offset="H_OFF_REEL",
+              doc="reel table, then the intervals of the table laws (5 floats each: t_k, a0..a3)"),
     ),
     "scratch": (
         Table("rod_scratch", (Part("rods", "n_rods", ROD_SCRATCH), Part("joints", "n_joints", JOINT_SCRATCH)),
@@ -280,6 +314,8 @@ BLOCK = {
         Table("body_scratch", (Part("bodies", "n_bodies", BODY_SCRATCH), Part("tethers", "n_tethers", TETHER_SCRATCH),
                                Part("wheels", "n_wheels", WHEEL_SCRATCH), Part("work6", 72)),
               offset="H_OFF_BSCR", doc="per body, per tether, per wheel, then a 6x6 work area"),
+        Table("reel_scratch", (Part("reels", "n_reels", REEL_SCRATCH),), offset="H_OFF_RSCR",
+              doc="per reel: its law's values and the exit's momentum flux at the last evaluation"),
     ),
 }
 
@@ -376,12 +412,13 @@ def layout_constants(block: dict = BLOCK, records: tuple = RECORDS) -> dict:
 
 
 def dims_of(*, n_rods, n_tethers, n_bodies, n_wheels, n_effects, n_effect_pars, n_quadrature, n_roots, n_rest,
-            n_wheel_table_floats) -> dict:
+            n_wheel_table_floats, n_reels=0, n_reel_table_floats=0) -> dict:
     """The model dimensions the tables are sized by (``n_joints`` follows: n + 1 joints per tether)."""
     return {
         "n_rods": n_rods, "n_tethers": n_tethers, "n_bodies": n_bodies, "n_wheels": n_wheels,
         "n_effects": n_effects, "n_effect_pars": n_effect_pars, "n_quadrature": n_quadrature, "n_roots": n_roots,
         "n_rest": n_rest, "n_wheel_table_floats": n_wheel_table_floats, "n_joints": n_rods + n_tethers,
+        "n_reels": n_reels, "n_reel_table_floats": n_reel_table_floats,
     }
 
 

@@ -24,7 +24,7 @@ from ..kernel import layout as _L
 from ..kernel import schema as S
 from ..kernel.schema import block_offsets, dims_of  # noqa: F401  (build_model sizes the block with these)
 
-_CODE_PREFIXES = ("FORM_", "MODEL_", "FAIL_", "MUT_", "DEFECT_", "CTRL_", "WMODE_")
+_CODE_PREFIXES = ("FORM_", "MODEL_", "FAIL_", "MUT_", "DEFECT_", "CTRL_", "WMODE_", "REEL_")
 globals().update({k: v for k, v in vars(_L).items() if k.startswith(_CODE_PREFIXES)})
 N_EFFECT_CODES = S.N_EFFECT_CODES
 
@@ -172,6 +172,7 @@ class ParamView(_Header):
             n_effects=self.n_effects, n_effect_pars=sum(e.n_par for e in self.effects), n_quadrature=self.n_quadrature,
             n_roots=self.n_roots, n_rest=self.n_rest,
             n_wheel_table_floats=sum(2 * w.table_points for w in self.wheels if w.mode == WMODE_TABLE),  # noqa: F821
+            n_reels=self.n_reels, n_reel_table_floats=sum(5 * r.table_intervals for r in self.reels),
         )
 
     def part_offset(self, table: str, part: str) -> int:
@@ -233,6 +234,17 @@ class ParamView(_Header):
     @property
     def wheel_scratch(self) -> TableView:
         return self._table("body_scratch", "wheels", "n_wheels", "wheel_scratch")
+
+    @property
+    def reels(self) -> TableView:
+        return self._table("reels", "rows", "n_reels", "reel")
+
+    @property
+    def reel_scratch(self) -> TableView:
+        return self._table("reel_scratch", "reels", "n_reels", "reel_scratch")
+
+    def reel(self, i: int) -> RecordView:
+        return self.reels[i]
 
     def tether(self, k: int) -> RecordView:
         return self.tethers[k]

@@ -167,6 +167,9 @@ def _check_run(scene: Scene) -> None:
             raise SceneError(
                 f"bodies.{t.to_body}.velocity", "[0, 0, 0] m/s: a static equilibrium starts at rest", str(tip[1].tolist())
             )
+    for k, t in enumerate(tethers):
+        if t.reel is not None:
+            _check_reel(scene, t, graph.tethers[k], by_name)
     # events (kernel/events.py::event_components): the stop altitude and every rod of a
     # tension-only tether
     events = (["stop"] if scene.stop is not None and scene.stop.altitude_m is not None else []) + (
@@ -178,6 +181,27 @@ def _check_run(scene: Scene) -> None:
             f"({', '.join(sorted(events))}) that only they locate",
             repr(scene.integrator.method),
         )  # fmt: skip
+
+
+def _check_reel(scene: Scene, t: Tether, oriented, by_name: dict) -> None:
+    """What a reel can run today (docs/deployment.md 7): at its body's attachment of the tether, on
+    a point mass, in the Cowell formulation, from a straight start."""
+    path = f"tethers.{t.name}.reel"
+    if oriented.reversed:
+        raise SceneError(
+            path, f"a reel at the end of the tether its body holds it by: {t.from_body!r} hangs from this tether, so "
+            f"its attachment end is 'to' ({t.to_body!r}); write the tether from {t.to_body!r} to {t.from_body!r}",
+            f"a reel at 'from' = {t.from_body!r}",
+        )  # fmt: skip
+    if by_name[t.from_body].rigid is not None:
+        raise SceneError(path, "a reel on a point-mass body (a reel on a rigid body is not built yet)",
+                         f"a reel on the rigid body {t.from_body!r}")  # fmt: skip
+    if scene.integrator.formulation != "cowell":
+        raise SceneError("integrator.formulation", "'cowell' for a scene with a reel (its rods are born and retired "
+                         "between segments of the Cowell state)", repr(scene.integrator.formulation))  # fmt: skip
+    if t.initial is not None and t.initial.shape != "straight":
+        raise SceneError(f"tethers.{t.name}.initial.shape", "'straight' for a tether paid out by a reel",
+                         repr(t.initial.shape))  # fmt: skip
 
 
 def _check_end_distance(t: Tether, distance: float, path: str) -> None:

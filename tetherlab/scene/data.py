@@ -185,6 +185,30 @@ class InitialShape:
         return tuple(self.theta_rad), tuple(self.phi_rad)
 
 
+REEL_LAWS = ("constant", "exponential", "table")
+REEL_EXITS = ("canister", "drum")
+
+
+@dataclass(frozen=True)
+class Reel:
+    """A reel at the tether's `from` end paying it out or hauling it in (docs/deployment.md).
+
+    The deployed unstretched length follows the law from the tether's ``length`` at t = 0; the
+    first rod (at the reel) varies, the others have ``rod_length_m``; a rod is born when the first
+    exceeds ``birth_length_m`` and the first is merged into the next below ``retire_length_m``."""
+
+    law: str  # REEL_LAWS
+    exit: str = "canister"  # REEL_EXITS
+    speed_m_s: float = 0.0  # law 'constant': dL/dt
+    rate_1_s: float = 0.0  # law 'exponential': L = L0 exp(rate t)
+    rod_length_m: float = 0.0
+    birth_length_m: float = 0.0
+    retire_length_m: float = 0.0
+    stored_length_m: float = 0.0  # tether still on the reel at t = 0
+    times_s: tuple = ()  # law 'table': times from 0, increasing
+    lengths_m: tuple = ()  # law 'table': L at those times (a natural cubic spline between them)
+
+
 @dataclass(frozen=True)
 class Tether:
     name: str
@@ -206,6 +230,7 @@ class Tether:
     initial: InitialShape | None = None
     from_point_m: Vector3 | None = None  # attachment on the rigid `from` body, body axes
     to_point_m: Vector3 | None = None
+    reel: Reel | None = None  # a tether of varying length (docs/deployment.md)
 
 
 #: frames a spin axis may be written in

@@ -17,6 +17,7 @@ from ..units import (
     LENGTH,
     MASS,
     MOMENT_OF_INERTIA,
+    RATE,
     SPEED,
     TIME,
     TORQUE,
@@ -163,6 +164,20 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
                 entry["from_point"] = _vec(t.from_point_m, LENGTH)
             if t.to_point_m is not None:
                 entry["to_point"] = _vec(t.to_point_m, LENGTH)
+            if t.reel is not None:
+                r = t.reel
+                entry.pop("rods")  # the reel decides them
+                entry["reel"] = {"exit": r.exit, "law": r.law, "rod_length": format_si(r.rod_length_m, LENGTH),
+                                 "birth_length": format_si(r.birth_length_m, LENGTH),
+                                 "retire_length": format_si(r.retire_length_m, LENGTH),
+                                 "stored_length": format_si(r.stored_length_m, LENGTH)}  # fmt: skip
+                if r.law == "constant":
+                    entry["reel"]["speed"] = format_si(r.speed_m_s, SPEED)
+                elif r.law == "exponential":
+                    entry["reel"]["rate"] = format_si(r.rate_1_s, RATE)
+                else:
+                    entry["reel"]["times"] = [format_si(x, TIME) for x in r.times_s]
+                    entry["reel"]["lengths"] = [format_si(x, LENGTH) for x in r.lengths_m]
             # A default shape is left out: it reads back the same, and a sweep that later places
             # both ends explicitly is not tripped by a shape nobody asked for.
             if t.initial is not None and t.initial != InitialShape():

@@ -46,6 +46,7 @@ from .keys import (
     _table,
     _vector,
 )
+from .reels import parse_reel, rods_for
 
 
 _TETHER_KEYS = (
@@ -66,6 +67,7 @@ _TETHER_KEYS = (
     "tension_only",
     "from_point",
     "to_point",
+    "reel",
 )
 
 
@@ -90,8 +92,16 @@ def _parse_tethers(value: Any, bodies: tuple[Body, ...]) -> tuple[Tether, ...]:
         if end == start:
             raise SceneError(f"{path}.to", f"a body other than 'from' ({start!r})", f"{end!r} (the same body at both ends)")
         to_owner[end] = name
-        rods = _integer(_required(table, "rods", path, "an integer >= 1"), f"{path}.rods", 1)
         length = _quantity(_required(table, "length", path, LENGTH.describe()), f"{path}.length", LENGTH, positive=True)
+        reel = parse_reel(table["reel"], f"{path}.reel", length) if "reel" in table else None
+        if reel is None:
+            rods = _integer(_required(table, "rods", path, "an integer >= 1"), f"{path}.rods", 1)
+        else:
+            # the reel decides the rods: full rods of reel.rod_length and the one at the reel
+            rods = rods_for(length, reel)
+            if "rods" in table and table["rods"] != rods:
+                raise SceneError(f"{path}.rods", f"no 'rods' with a reel, or the count its rod_length gives ({rods})",
+                                 shown(table["rods"]))  # fmt: skip
         diameter = _quantity(table["diameter"], f"{path}.diameter", LENGTH, positive=True) if "diameter" in table else None
         area = None if diameter is None else math.pi * diameter * diameter / 4.0
 
@@ -135,7 +145,7 @@ def _parse_tethers(value: Any, bodies: tuple[Body, ...]) -> tuple[Tether, ...]:
         to_point = _vector(table["to_point"], f"{path}.to_point", LENGTH) if "to_point" in table else None
         tethers.append(
             Tether(name, start, end, rods, length, ea, mass, damping, model, quadrature, diameter, tension_only=tension_only,
-                   initial=initial, from_point_m=from_point, to_point_m=to_point)
+                   initial=initial, from_point_m=from_point, to_point_m=to_point, reel=reel)
         )
     return tuple(tethers)
 

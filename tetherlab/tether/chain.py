@@ -65,11 +65,13 @@ from ..kernel.layout import (
     TT_CHILD,
     TT_MODEL,
     TT_NRODS,
+    TT_REEL,
     TT_ROD0,
     TT_SIZE,
     TT_TENSION_ONLY,
 )
 from ..kernel.vec3 import add_iuu, inv3, iuu_vec, mat_vec, sub_iuu_sandwich
+from .reel import reel_rod_load
 from .rod import SQ3, fail, next_joint, rod_force, rod_share
 
 __all__ = ["SQ3", "next_joint", "chain_walk", "chain_reduce", "chain_back_substitute", "chain_share",
@@ -87,11 +89,14 @@ def chain_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz):
     tension_only = p[tb + TT_TENSION_ONLY] != 0.0
     energy = int(p[tb + TT_MODEL]) == MODEL_ENERGY
     printed = int(p[tb + TT_MODEL]) == MODEL_PRINTED
+    reel = int(p[tb + TT_REEL]) - 1  # the first rod of a tether paid out by a reel varies in length
     for g in range(g0, g0 + n):
         if with_forces:
             code = rod_force(t, q, qd, p, g, tension_only, energy, printed, ax, ay, az, avx, avy, avz)
             if code != 0:
                 return code, ax, ay, az, avx, avy, avz
+            if reel >= 0 and g == g0:
+                reel_rod_load(q, qd, p, reel, g, tension_only, energy)
         ax, ay, az, avx, avy, avz = next_joint(q, qd, g, ax, ay, az, avx, avy, avz)
     return 0, ax, ay, az, avx, avy, avz
 

@@ -53,6 +53,7 @@ from ..kernel.layout import (
     H_OFF_ORDER,
     H_OFF_ROD,
     H_OFF_ROOTS,
+    H_OFF_RSCR,
     H_OFF_TETH,
     H_ROOT_INV_M,
     H_ROOT_M,
@@ -64,6 +65,8 @@ from ..kernel.layout import (
     RT_LU,
     RT_M,
     RT_SIZE,
+    RS_LAM,
+    RS_SIZE,
     BT_INV_M,
     BT_M,
     BT_NCHILD,
@@ -75,6 +78,7 @@ from ..kernel.layout import (
     TT_CHILD,
     TT_PA,
     TT_NRODS,
+    TT_REEL,
     TT_ROD0,
     TT_SIZE,
     TT_TENSION_ONLY,
@@ -227,6 +231,10 @@ def rod_blocks(y, p, m1, blk):
         # C^-1 = I/c1 - c2/(c1 (c1 + c2)) u u^T;  Kc = C^-1 / (2 sqrt3)
         kc_i = 1.0 / (2.0 * SQ3 * c1)
         kc_u = -c2 / (2.0 * SQ3 * c1 * (c1 + c2))
+        reel = int(p[tb + TT_REEL]) - 1
+        # the first rod at a reel: its strain rate has the l' term (tether/reel.py), whose damping
+        # force changes the tension the geometric stiffness fe/l is made of
+        lam = p[int(p[H_OFF_RSCR]) + reel * RS_SIZE + RS_LAM] if reel >= 0 else 0.0
         for i in range(n):
             g = g0 + i
             rb = offr + g * RT_SIZE
@@ -245,6 +253,10 @@ def rod_blocks(y, p, m1, blk):
             vrel = (2.0 * SQ3 * dd[0], 2.0 * SQ3 * dd[1], 2.0 * SQ3 * dd[2])
             uv = u[0] * vrel[0] + u[1] * vrel[1] + u[2] * vrel[2]
             epsd = uv / lu
+            ea_eff = ea  # d(fe)/d(eps): the l' term adds -D lambda at the reel
+            if i == 0 and reel >= 0:
+                epsd -= (1.0 + eps) * lam
+                ea_eff = ea - damp * lam
             fe = ea * eps + damp * epsd
             slack = tension_only and (eps <= 0.0 or fe < 0.0)
             # w = (I - u u^T) v_rel / l : d(u . v_rel)/dx_B
@@ -263,7 +275,7 @@ def rod_blocks(y, p, m1, blk):
                         b[B_KV + 3 * a + c] = 0.0
                     else:
                         # d(fe u)/d(x_B - x_A) and d(fe u)/d(v_B - v_A)
-                        b[B_KEL + 3 * a + c] = (ea / lu) * uu + (fe / ell) * (de - uu) + (
+                        b[B_KEL + 3 * a + c] = (ea_eff / lu) * uu + (fe / ell) * (de - uu) + (
                             damp / lu) * u[a] * w[c]  # fmt: skip
                         b[B_KV + 3 * a + c] = (damp / lu) * uu
     return 0

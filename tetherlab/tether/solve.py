@@ -54,6 +54,7 @@ from ..kernel.layout import (
     FAIL_NONFINITE,
     FAIL_SINGULAR,
     H_NBODY,
+    H_NREEL,
     H_NROOT,
     H_NRODS,
     H_NTETH,
@@ -80,6 +81,7 @@ from ..kernel.layout import (
     WS_SIZE,
 )
 from .parts import tether_back_substitute, tether_reduce, tether_walk
+from .reel import reel_body_forces, reel_update
 from .rod import fail, next_joint
 
 
@@ -135,6 +137,11 @@ def system_accelerations(t, q, qd, att, p, acc, datt):
     into ``datt`` (empty for a point-mass scene).  Leaves in the scratch area, per joint, the
     reaction J_k (used by the diagnostics).  Returns 0 or a failure code (details in p's header).
     """
+    reels = int(p[H_NREEL]) > 0
+    if reels:  # lengths and masses that vary in time, before anything reads them (tether/reel.py)
+        code = reel_update(t, p)
+        if code != 0:
+            return code
     code = forward(t, q, qd, att, p, True)
     if code != 0:
         return code
@@ -151,6 +158,8 @@ def system_accelerations(t, q, qd, att, p, acc, datt):
 
     for b in range(nbody):
         body_setup(t, att, p, b, datt)
+    if reels:
+        reel_body_forces(p)
 
     # compliance up the tree, leaves first
     for i in range(nteth):

@@ -1,0 +1,72 @@
+"""Deployment from a reel against the same system at its final length (docs/deployment.md).
+
+A 1000 kg station on a 7000 km circular orbit pays out a line (EA 1e4 N, 0.2 g/m, damping
+2e4 N s) to a 25 kg end mass at constant speed, from 500 m to 20 km in one orbit, with rods of
+2000, 1000 and 500 m (10, 20 and 40 births); the reference is the same system at its final
+length, 20 km in rods of the same length, over the same time. Target (issue): the deployment with
+rods of 500 m costs at most 2x the fixed run; the cost per birth (the phase's set-up: a model
+built, the state remapped, the integrator restarted) is the difference divided by the births; the
+last row fits the wall time's exponent in the final rod count (target ~1: linear in rods).
+RADAU5 with the structured Newton matrix, rtol 1e-8; wall times, the kernels already compiled.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+ROD_LENGTHS_M = (2000.0, 1000.0, 500.0)
+L0_M, L1_M = 500.0, 20000.0
+
+
+def _scene(rod_m: float, reel: bool):
+    from ..scene import Scene
+
+    import math
+
+    period = 2 * math.pi * math.sqrt((7000e3) ** 3 / 3.986004418e14)
+    tether = {"from": "m0", "to": "mf", "EA": "1e4 N", "linear_density": "2e-4 kg/m", "damping": "2e4 N s",
+              "model": "paper", "initial": {"shape": "straight", "theta": "0 deg"}}
+    if reel:
+        tether.update(length=f"{L0_M} m", reel={"law": "constant", "speed": f"{(L1_M - L0_M) / period} m/s",
+                                                "rod_length": f"{rod_m} m", "stored_length": f"{L1_M} m"})
+    else:
+        tether.update(length=f"{L1_M} m", rods=int(round(L1_M / rod_m)))
+    return Scene.from_dict({
+        "name": "deployment-bench", "duration": f"{period} s", "effects": {"central_gravity": {}},
+        "bodies": {"m0": {"mass": "1000 kg"}, "mf": {"mass": "25 kg"}},
+        "orbit": {"reference": "center_of_mass", "motion": "corotating",
+                  "elements": {"a": "7000 km", "e": 0.0, "i": "0 deg", "raan": "0 deg", "argp": "0 deg", "nu": "0 deg"}},
+        "tethers": {"main": tether},
+        "integrator": {"method": "radau5", "rtol": 1e-8, "atol": 1e-8},
+        "output": {"count": 101},
+    })  # fmt: skip
+
+
+def _wall(scene) -> tuple[float, object]:
+    from ..pipeline import simulate
+
+    t0 = time.perf_counter()
+    res = simulate(scene, progress=False)
+    return time.perf_counter() - t0, res
+
+
+def bench_rows(rod_lengths=ROD_LENGTHS_M) -> list[dict]:
+    _wall(_scene(rod_lengths[0], True))  # warm-up: compilation excluded
+    rows = []
+    walls, rods = [], []
+    for rod_m in rod_lengths:
+        w_reel, dep = _wall(_scene(rod_m, True))
+        w_fixed, _ = _wall(_scene(rod_m, False))
+        births = sum(1 for c in dep.changes if c["change"] == "birth")
+        n_final = int(dep.reel["rods"].iloc[-1])
+        rows.append({"rod_m": rod_m, "births": births, "final_rods": n_final, "deploy_s": w_reel,
+                     "fixed_s": w_fixed, "ratio": w_reel / w_fixed,
+                     "per_birth_ms": 1e3 * (w_reel - w_fixed) / births if births else float("nan")})  # fmt: skip
+        walls.append(w_reel)
+        rods.append(n_final)
+    fit = float(np.polyfit(np.log(rods), np.log(walls), 1)[0])
+    rows.append({"rod_m": "fitted exponent", "births": "", "final_rods": "", "deploy_s": fit, "fixed_s": "",
+                 "ratio": "", "per_birth_ms": ""})
+    return rows

@@ -1,0 +1,364 @@
+"""A run of a scene with reels: phases of a fixed rod count between births and retirements.
+
+A reel's first rod varies in length (tether/reel.py).  When it grows past the reel's birth bound
+a new rod is born at the reel; when it shrinks below the retirement bound it is merged into the
+next.  Either ends a phase: the run's segment loop (pipeline.run_segments) stops at that time,
+the state is remapped through the model's StateLayout into the layout of the next rod count
+(:func:`birth_state`, :func:`retire_state`; docs/deployment.md 6) and the next phase starts
+from it.  The laws are prescribed, so the times of births and retirements are known before a
+phase starts (:func:`next_change`).
+
+What a phase keeps: its own :class:`~tetherlab.result.Result` (its own columns: the rod count
+differs), and the reel table (:data:`tetherlab.tether.reel_diagnostics.REEL_COLUMNS`) with the
+material invariants that are continuous across phases: momentum, angular momentum and energy of
+bodies, stored tether and rods, and the energy taken out at the exit, integrated over the run.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import pandas as pd
+
+from . import diagnostics as diag
+from .errors import SceneError
+from .scene.reels import length_at, speed_at, table_spline
+
+SQ3 = math.sqrt(3.0)
+
+
+@dataclass
+class DeploymentResult:
+    """``phases``: one Result per phase (its own rod count); ``reel``: per output row and reel,
+    the reel's quantities (t_s, phase, reel, rods, stored_length_m, REEL_COLUMNS, exit_work_J,
+    carnot_J); ``invariants``: per row the material momentum, angular momentum and energy of the
+    whole system and energy + exit work; ``changes``: the births and retirements."""
+
+    phases: list
+    reel: pd.DataFrame
+    invariants: pd.DataFrame
+    changes: list = field(default_factory=list)
+    status: int = 0
+    message: str = ""
+    stopped_by: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.status == 0
+
+
+def reel_tethers(scene) -> list:
+    return [t for t in scene.tethers if t.reel is not None]
+
+
+def check_law(scene, duration_s: float) -> None:
+    """The law must keep 0 < L(t) <= deployed + stored over the run (a SceneError naming the key)."""
+    for t in reel_tethers(scene):
+        r = t.reel
+        path = f"tethers.{t.name}.reel"
+        line = t.length_m + r.stored_length_m
+        if r.law == "table":
+            if r.times_s[-1] < duration_s:
+                raise SceneError(f"{path}.times", f"a table reaching the end of the run ({duration_s:.6g} s)",
+                                 f"a last time of {r.times_s[-1]:.6g} s")  # fmt: skip
+            ts = np.linspace(0.0, duration_s, 20001)
+            ls = table_spline(r)(ts)
+            if not ls.min() > 0.0:
+                raise SceneError(f"{path}.lengths", "lengths whose spline stays positive over the run",
+                                 f"L = {ls.min():.6g} m at t = {ts[ls.argmin()]:.6g} s")  # fmt: skip
+            end = float(ls.max())
+        else:
+            end = length_at(r, t.length_m, duration_s)
+        if r.law == "constant" and not end > 0.0:
+            when = t.length_m / -r.speed_m_s
+            raise SceneError(f"{path}.speed", f"a speed that keeps the deployed length positive over the run "
+                             f"({duration_s:.6g} s); at most {t.length_m / duration_s:.6g} m/s of retrieval",
+                             f"{r.speed_m_s:.6g} m/s (L reaches 0 at t = {when:.6g} s)")  # fmt: skip
+        if max(end, t.length_m) > line * (1.0 + 1e-12):
+            raise SceneError(f"{path}.stored_length", f"at least {max(end, t.length_m) - t.length_m:.6g} m: the law "
+                             f"deploys {end:.6g} m by the end of the run", f"{r.stored_length_m:.6g} m")  # fmt: skip
+
+
+def next_change(reel, length0_m: float, rods: int, t_a: float, t_end: float):
+    """The first time after t_a when the first rod reaches a bound: (t, kind) with kind 'birth',
+    'retire' or 'retrieved' (the last rod below the retirement bound), or (inf, None)."""
+    fixed = (rods - 1) * reel.rod_length_m
+    targets = [(fixed + reel.birth_length_m, "birth")]
+    targets.append((fixed + reel.retire_length_m, "retire" if rods > 1 else "retrieved"))
+    best = (math.inf, None)
+    for target, kind in targets:
+        if reel.law == "table":
+            roots = [float(x) for x in table_spline(reel).solve(target, extrapolate=True)
+                     if x > t_a * (1.0 + 1e-12) + 1e-9]  # fmt: skip
+            if not roots:
+                continue
+            tc = min(roots)
+        elif reel.law == "constant":
+            if reel.speed_m_s == 0.0:
+                continue
+            tc = (target - length0_m) / reel.speed_m_s
+        else:
+            if reel.rate_1_s == 0.0:
+                continue
+            tc = math.log(target / length0_m) / reel.rate_1_s
+        # a change at t_a itself is the one just made (its bound is now a rod away)
+        if tc > t_a * (1.0 + 1e-12) + 1e-9 and tc <= t_end and tc < best[0]:
+            best = (tc, kind)
+    return best
+
+
+def reel_start(model, y0: np.ndarray) -> np.ndarray:
+    """The initial state of a scene whose tethers are paid out by reels: the straight start the
+    initial layout made for equal rods, re-cut to the reel's rods (the first at the reel
+    shorter; the ends and the strain kept), and the line moving out of the reel at the law's
+    speed L'(0)(1 + eps) relative to the rigid motion (no velocity jump at the first instant)."""
+    from .model.params import REEL_LAW_CONSTANT, REEL_LAW_TABLE, ParamView
+
+    y = np.array(y0, float)
+    lay = model.state
+    v = ParamView(model.p)
+    lengths = model.rod_lengths()
+    for i in range(v.n_reels):
+        rv = v.reel(i)
+        k = int(rv.tether)
+        sl = model.rod_slices[k]
+        gs = range(sl.start, sl.stop)
+        S = sum(y[lay.rod(g)] for g in gs) * 2 * SQ3
+        Sd = sum(y[lay.rod_rate(g)] for g in gs) * 2 * SQ3
+        L = sum(lengths[g] for g in gs)
+        for g in gs:
+            y[lay.rod(g)] = S * lengths[g] / L / (2 * SQ3)
+            y[lay.rod_rate(g)] = Sd * lengths[g] / L / (2 * SQ3)
+        eps = float(np.linalg.norm(S)) / L - 1.0
+        u = S / np.linalg.norm(S)
+        if int(rv.law) == REEL_LAW_CONSTANT:
+            speed = rv.speed_m_s
+        elif int(rv.law) == REEL_LAW_TABLE:
+            speed = float(model.p[int(rv.table_offset) + 2])  # a1 of the first interval: L'(0)
+        else:
+            speed = rv.rate_1_s * rv.length0_m
+        y[lay.rod_rate(sl.start)] += speed * (1.0 + eps) * u / (2 * SQ3)
+    return y
+
+
+def birth_state(lay_old, lay_new, y: np.ndarray, g0: int, l_m: float, la_m: float, speed_m_s: float) -> np.ndarray:
+    """The state after a birth: rod g0 (length l, at the reel) cut at the material point la from
+    the reel into a new first rod (la, varying) and a full rod (l - la).  Every point of the line
+    keeps its position and its material velocity v_A + s D' + (1 - s) w (docs/deployment.md 6.1),
+    so mass, momentum, angular momentum and kinetic energy are those of before, to round-off."""
+    d = y[lay_old.rod(g0)]
+    dd = y[lay_old.rod_rate(g0)]
+    f = la_m / l_m
+    lam = speed_m_s / l_m
+    d_a = f * d
+    dd_a = f * dd + (1.0 - f) * lam * d
+    return _with_rods(lay_old, lay_new, y, g0, 1, [(d_a, dd_a), (d - d_a, dd - dd_a)])
+
+
+def retire_state(model_old, lay_new, y: np.ndarray, k: int, rho_kg_m: float, la_m: float, lb_m: float,
+                 speed_m_s: float) -> np.ndarray:
+    """The state after a retirement: the first rod of tether k (length la, at the reel) and the next
+    (lb) merged into one rod of la + lb from the exit to the next's far end B.  Two rods become one
+    straight rod whose material moves with the field (2.1) of docs/deployment.md, so the momentum of
+    their material changes (the transport speed, l' (1 + eps) at the exit, spread over la + lb
+    instead of la) by dP; the velocity of B is changed by delta so that the merged rod and what
+    moves with B (the next rod's near end, or the end body) take -dP back: linear momentum is kept
+    to round-off, angular momentum and energy change (reported by the invariants; section 6.2)."""
+    from .system import point_positions
+
+    lay_old = model_old.state
+    g0 = model_old.rod_slices[k].start
+    n = model_old.rod_slices[k].stop - g0
+    d_a, d_b = y[lay_old.rod(g0)], y[lay_old.rod(g0 + 1)]
+    dd_a, dd_b = y[lay_old.rod_rate(g0)], y[lay_old.rod_rate(g0 + 1)]
+    v_a = point_positions(model_old, y)["jvel"][k][0]
+    k2 = 2 * SQ3
+    m_a, m_b, m = rho_kg_m * la_m, rho_kg_m * lb_m, rho_kg_m * (la_m + lb_m)
+    p_old = m_a * (v_a + k2 * dd_a / 2) + m_a * (speed_m_s / la_m) * k2 * d_a / 2 + m_b * (v_a + k2 * dd_a + k2 * dd_b / 2)
+    d, dd = d_a + d_b, dd_a + dd_b
+    p_new = m * (v_a + k2 * dd / 2) + m * (speed_m_s / (la_m + lb_m)) * k2 * d / 2
+    if n >= 3:  # the next rod's near end moves with B: half its mass
+        beyond = rho_kg_m * lb_m / 2.0  # (every rod but the first is a full rod of lb)
+    else:
+        tip = model_old.tethers[k].tip_mass_kg
+        beyond = tip if tip > 0 else 0.0
+    delta = -(p_new - p_old) / (m / 2.0 + beyond)  # the change of v_B
+    dd = dd + delta / k2
+    z = _with_rods(lay_old, lay_new, y, g0, 2, [(d, dd)])
+    if n >= 3:  # the next rod keeps its far end's velocity
+        z[lay_new.rod_rate(g0 + 1)] -= delta / k2
+    return z
+
+
+def _with_rods(lay_old, lay_new, y, g0, n_out, rods_in) -> np.ndarray:
+    """y with rods g0 .. g0 + n_out - 1 replaced by ``rods_in`` [(d, d')] (the blocks of q and q'
+    shift; the first-order blocks pass through)."""
+    z = np.empty(lay_new.size)
+    q_old, qd_old = y[lay_old.q], y[lay_old.qd]
+    a, b = lay_old.rod(g0).start, lay_old.rod(g0 + n_out - 1).stop
+    new_q = np.concatenate([q_old[:a]] + [r[0] for r in rods_in] + [q_old[b:]])
+    new_qd = np.concatenate([qd_old[:a]] + [r[1] for r in rods_in] + [qd_old[b:]])
+    z[lay_new.q] = new_q
+    z[lay_new.qd] = new_qd
+    z[lay_new.first_order] = y[lay_old.first_order]
+    return z
+
+
+def _rows(model, t, Y):
+    """The reel table and the material invariants of a phase's rows."""
+    from .tether.reel_diagnostics import R_NCOL, reel_rows
+
+    p = model.fresh_params()
+    nreel = int(p_view(p).n_reels)
+    out = np.full((len(t), nreel, R_NCOL), np.nan)
+    acc = np.zeros(model.n_qt)
+    datt = np.zeros(Y.shape[1] - 2 * model.n_qt)
+    bad = reel_rows(np.ascontiguousarray(t, float), np.ascontiguousarray(Y, float), p, out, acc, datt)
+    d = diag.compute(model, t, Y)
+    return out, d, bad
+
+
+def p_view(p):
+    from .model.params import ParamView
+
+    return ParamView(p)
+
+
+def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect: int = 0) -> DeploymentResult:
+    """Run a scene with reels phase by phase (module docstring).  A failed phase ends the run and
+    keeps every output before it; a retrieval of the last rod stops it with the event
+    'reel.<tether>.retrieved'.  ``defect``: negative controls only (kernel/layout.py DEFECT_*)."""
+    from .pipeline import SimulationError, _ProgressBar, prepare, run_outcome, run_segments, segment_plan
+    from .result import Result
+    from .tether.reel_diagnostics import REEL_COLUMNS
+
+    tethers = reel_tethers(scene)
+    prep0 = prepare(scene)
+    t_out = prep0.t_out
+    t_end = float(t_out[-1])
+    check_law(scene, t_end)
+    bar = _ProgressBar(t_end, enabled=progress) if not callable(progress) else None
+    update = bar.update if bar is not None else progress
+    state = {t.name: t.rods for t in tethers}
+    knots = sorted({float(x) for t in tethers if t.reel.law == "table" for x in t.reel.times_s[1:-1]})
+    t_a = 0.0
+    y = prep0.y0
+    prep = prep0
+    phases, reel_parts, inv_parts, changes = [], [], [], []
+    status, message, stopped = 0, "", None
+    ph = 0
+    while True:
+        # the next birth or retirement of any reel
+        nxt = (math.inf, None, None)
+        for t in tethers:
+            tc, kind = next_change(t.reel, t.length_m, state[t.name], t_a, t_end)
+            if tc < nxt[0]:
+                nxt = (tc, kind, t)
+        # a table law's knots end a phase too, so that no step straddles the jump of L's third derivative
+        knot = min((k for k in knots if k > t_a * (1.0 + 1e-12) + 1e-9), default=math.inf)
+        if knot < nxt[0] and knot < t_end:
+            nxt = (knot, "knot", None)
+        t_b = min(nxt[0], t_end)
+        inside = t_out[(t_out > t_a) & (t_out < t_b)]
+        times = np.concatenate([[t_a], inside, [t_b]])
+        prep = replace(prep, y0=y, t_out=times, t0_s=t_a)
+        p_view(prep.model.p).defect = defect  # 0 in every user run
+        p = prep.model.fresh_params()
+        res = run_segments(prep, segment_plan(prep, p), update)
+        stats, msg = run_outcome(prep, res, p, 0.0)
+        out, d, _ = _rows(prep.model, res.t, res.y)
+        phases.append(Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, msg, p))
+        g = d["global"]
+        for i, t in enumerate(tethers):
+            cols = {"t_s": res.t, "phase": ph, "reel": t.name, "rods": state[t.name]}
+            for c, name in enumerate(REEL_COLUMNS):
+                cols[name] = out[:, i, c]
+            cols["stored_length_m"] = t.length_m + t.reel.stored_length_m - out[:, i, 0]
+            reel_parts.append(pd.DataFrame(cols))
+        corr = out[:, :, 9:16].sum(axis=1)
+        inv = {"t_s": res.t, "phase": ph}
+        for j, ax in enumerate("xyz"):
+            inv[f"momentum_{ax}_N_s"] = g[:, diag.G_PX + j] + corr[:, j]
+        for j, ax in enumerate("xyz"):
+            inv[f"angmom_{ax}_kg_m2_s"] = g[:, diag.G_HX + j] + corr[:, 3 + j]
+        inv["kinetic_J"] = g[:, diag.G_KE] + corr[:, 6]
+        inv["energy_J"] = g[:, diag.G_E] + corr[:, 6]
+        inv["exit_power_W"] = out[:, :, 7].sum(axis=1)
+        inv_parts.append(pd.DataFrame(inv))
+        if res.status != 0 or res.stopped_by is not None:
+            status, message = res.status, msg
+            stopped = stats.get("stopped_by")
+            break
+        if nxt[1] is None or t_b >= t_end:
+            break
+        if nxt[1] == "knot":  # the same model goes on from the knot
+            y = res.y_end
+            t_a = t_b
+            ph += 1
+            continue
+        # a birth, a retirement, or the last rod retrieved: the phase ends at t_b
+        t = nxt[2]
+        reel = t.reel
+        n = state[t.name]
+        lay_old = prep.model.state
+        g0 = prep.model.rod_slices[[x.name for x in prep.model.tethers].index(t.name)].start
+        L = length_at(reel, t.length_m, t_b)
+        speed = speed_at(reel, t.length_m, t_b)
+        if nxt[1] == "retrieved":
+            stopped = f"reel.{t.name}.retrieved"
+            message = (f"run stopped at t = {t_b:.9g} s: the tether {t.name!r} was retrieved to its last rod's "
+                       f"retirement bound ({reel.retire_length_m:.6g} m deployed); outputs up to it are kept")  # fmt: skip
+            changes.append({"t_s": t_b, "reel": t.name, "change": "retrieved", "rods": n})
+            break
+        l_first = L - (n - 1) * reel.rod_length_m
+        n_new = n + 1 if nxt[1] == "birth" else n - 1
+        state[t.name] = n_new
+        nxt_prep = prepare(scene, reel_phase={"first": prep0, "rods": {
+            x.name: (state[x.name], length_at(x.reel, x.length_m, t_b)) for x in tethers}})  # fmt: skip
+        lay_new = nxt_prep.model.state
+        y_end = res.y_end
+        if nxt[1] == "birth":
+            y = birth_state(lay_old, lay_new, y_end, g0, l_first, l_first - reel.rod_length_m, speed)
+        else:
+            k = [x.name for x in prep.model.tethers].index(t.name)
+            rho = t.mass_kg / t.length_m
+            y = retire_state(prep.model, lay_new, y_end, k, rho, l_first, reel.rod_length_m, speed)
+        changes.append({"t_s": t_b, "reel": t.name, "change": nxt[1], "rods": n_new})
+        prep = nxt_prep
+        t_a = t_b
+        ph += 1
+    if bar is not None:
+        bar.close()
+    reel_df = pd.concat(reel_parts, ignore_index=True)
+    inv_df = pd.concat(inv_parts, ignore_index=True)
+    # the energy taken out at the exit, integrated phase by phase (trapezoid on the outputs;
+    # docs/deployment.md 8 says how fine the outputs must be for the energy gate)
+    work = np.zeros(len(inv_df))
+    carnot = np.zeros(len(reel_df))
+    acc = 0.0
+    prev = None
+    for idx, row in enumerate(inv_df.itertuples()):
+        if prev is not None and row.phase == prev.phase:
+            acc += 0.5 * (row.exit_power_W + prev.exit_power_W) * (row.t_s - prev.t_s)
+        work[idx] = acc
+        prev = row
+    inv_df["exit_work_J"] = work
+    inv_df["energy_plus_exit_work_J"] = inv_df["energy_J"] + work
+    for name, part in reel_df.groupby("reel", sort=False):
+        c = 0.0
+        tt = part["t_s"].to_numpy()
+        cp = part["carnot_power_W"].to_numpy()
+        phs = part["phase"].to_numpy()
+        vals = np.zeros(len(part))
+        for j in range(1, len(part)):
+            if phs[j] == phs[j - 1]:
+                c += 0.5 * (cp[j] + cp[j - 1]) * (tt[j] - tt[j - 1])
+            vals[j] = c
+        carnot[part.index.to_numpy()] = vals
+    reel_df["carnot_J"] = carnot
+    result = DeploymentResult(phases, reel_df, inv_df, changes, status, message, stopped)
+    if status != 0 and raise_on_failure:
+        raise SimulationError(message, phases[-1])
+    return result

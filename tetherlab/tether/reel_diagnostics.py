@@ -1,0 +1,137 @@
+"""What a reel reports at every output (compiled; docs/deployment.md 4-5).
+
+Per reel and row (columns ``REEL_COLUMNS``): the deployed length L and its rate, the first rod's
+length, the exit speed L'(1 + eps), the tension the line pulls the exit with (-J_0.u), the
+momentum flux through the exit rho L'^2 (1 + eps), the pull the body feels (their difference),
+the power the exit takes out of the mechanical energy
+
+    D = T L'(1 + eps) - 1/2 rho L'^3 (1 + eps)^2 - 1/2 EA eps^2 L'       (docs/deployment.md 5),
+
+its Carnot part (a canister: 1/2 rho |L'|^3 (1 + eps)^2; a drum: 0), and the material corrections
+of the first rod's shares: the TMED shares (tether/rod.py) count the affine field v_A + xi D', the
+material moves with v_A + xi D' + (1 - xi) w, w = lambda D, which adds
+
+    momentum m w/2,   angular momentum r_A x m w/2,   kinetic energy m w.(v_A/2 + D'/6) + m |w|^2/6.
+"""
+
+from __future__ import annotations
+
+from .._jit import njit
+from ..kernel.layout import (
+    BS_SIZE,
+    H_NBODY,
+    H_NQT,
+    H_NREEL,
+    H_NRODS,
+    H_OFF_BSCR,
+    H_OFF_REEL,
+    H_OFF_ROD,
+    H_OFF_RSCR,
+    H_OFF_SCR,
+    H_OFF_TETH,
+    REEL_EXIT_CANISTER,
+    RL_EXIT,
+    RL_RHO,
+    RL_ROD,
+    RL_SIZE,
+    RL_TETH,
+    RS_JUMP,
+    RS_L,
+    RS_LAM,
+    RS_LD,
+    RS_LROD,
+    RS_SIZE,
+    RT_EA,
+    RT_M,
+    RT_SIZE,
+    SJ_J,
+    SJ_SIZE,
+    SR_EPS,
+    SR_FE,
+    SR_SIZE,
+    SR_U,
+    TS_A,
+    TS_SIZE,
+    TT_ROD0,
+    TT_SIZE,
+)
+from .rod import SQ3
+from .solve import system_accelerations
+
+REEL_COLUMNS = (
+    "deployed_length_m", "speed_m_s", "rod_length_m", "exit_speed_m_s", "exit_tension_N", "exit_jump_N",
+    "body_pull_N", "exit_power_W", "carnot_power_W", "dpx", "dpy", "dpz", "dhx", "dhy", "dhz", "dke", "rod_force_N",
+)  # fmt: skip
+R_NCOL = len(REEL_COLUMNS)
+
+
+@njit(cache=True)
+def reel_rows(ts, Y, p, out, acc, datt):
+    """Fill out[row, reel, :] (columns REEL_COLUMNS) for every state row of Y.  Returns the index
+    of the first row whose right-hand side failed, or -1."""
+    h = int(p[H_NQT])
+    nrods = int(p[H_NRODS])
+    jscr = int(p[H_OFF_SCR]) + nrods * SR_SIZE
+    tscr = int(p[H_OFF_BSCR]) + int(p[H_NBODY]) * BS_SIZE
+    for row in range(Y.shape[0]):
+        t = ts[row]
+        q = Y[row, :h]
+        qd = Y[row, h : 2 * h]
+        att = Y[row, 2 * h :]
+        if system_accelerations(t, q, qd, att, p, acc, datt) != 0:
+            return row
+        for i in range(int(p[H_NREEL])):
+            rb = int(p[H_OFF_REEL]) + i * RL_SIZE
+            rs = int(p[H_OFF_RSCR]) + i * RS_SIZE
+            k = int(p[rb + RL_TETH])
+            g = int(p[rb + RL_ROD])
+            g0 = int(p[int(p[H_OFF_TETH]) + k * TT_SIZE + TT_ROD0])
+            sb = int(p[H_OFF_SCR]) + g * SR_SIZE
+            m = p[int(p[H_OFF_ROD]) + g * RT_SIZE + RT_M]
+            ea = p[int(p[H_OFF_ROD]) + g * RT_SIZE + RT_EA]
+            rho = p[rb + RL_RHO]
+            ux = p[sb + SR_U]
+            uy = p[sb + SR_U + 1]
+            uz = p[sb + SR_U + 2]
+            eps = p[sb + SR_EPS]
+            ld = p[rs + RS_LD]
+            lam = p[rs + RS_LAM]
+            j0 = jscr + (g0 + k) * SJ_SIZE + SJ_J
+            tens = -(p[j0] * ux + p[j0 + 1] * uy + p[j0 + 2] * uz)
+            sp = ld * (1.0 + eps)
+            o = out[row, i]
+            o[0] = p[rs + RS_L]
+            o[1] = ld
+            o[2] = p[rs + RS_LROD]
+            o[3] = sp
+            o[4] = tens
+            o[5] = p[rs + RS_JUMP]
+            o[6] = tens - p[rs + RS_JUMP]
+            o[7] = tens * sp - 0.5 * rho * ld * sp * sp - 0.5 * ea * eps * eps * ld
+            o[8] = 0.5 * rho * abs(ld) * sp * sp if int(p[rb + RL_EXIT]) == REEL_EXIT_CANISTER else 0.0
+            # material corrections (w = lambda D, D = 2 sqrt3 d, D' = 2 sqrt3 d')
+            wx = lam * 2.0 * SQ3 * q[3 + 3 * g]
+            wy = lam * 2.0 * SQ3 * q[4 + 3 * g]
+            wz = lam * 2.0 * SQ3 * q[5 + 3 * g]
+            ts_ = tscr + k * TS_SIZE + TS_A
+            ax = p[ts_]
+            ay = p[ts_ + 1]
+            az = p[ts_ + 2]
+            vx = p[ts_ + 3]
+            vy = p[ts_ + 4]
+            vz = p[ts_ + 5]
+            hm = 0.5 * m
+            o[9] = hm * wx
+            o[10] = hm * wy
+            o[11] = hm * wz
+            o[12] = ay * o[11] - az * o[10]
+            o[13] = az * o[9] - ax * o[11]
+            o[14] = ax * o[10] - ay * o[9]
+            ddx = 2.0 * SQ3 * qd[3 + 3 * g]
+            ddy = 2.0 * SQ3 * qd[4 + 3 * g]
+            ddz = 2.0 * SQ3 * qd[5 + 3 * g]
+            o[15] = m * (wx * (0.5 * vx + ddx / 6.0) + wy * (0.5 * vy + ddy / 6.0) + wz * (0.5 * vz + ddz / 6.0)) + m * (
+                wx * wx + wy * wy + wz * wz
+            ) / 6.0
+            o[16] = p[sb + SR_FE]
+    return -1
