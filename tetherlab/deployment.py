@@ -213,8 +213,9 @@ def _rows(model, t, Y):
     p = model.fresh_params()
     nreel = int(p_view(p).n_reels)
     out = np.full((len(t), nreel, R_NCOL), np.nan)
-    acc = np.zeros(model.n_qt)
-    datt = np.zeros(Y.shape[1] - 2 * model.n_qt)
+    lay = model.state
+    acc = np.zeros(lay.n_qt)
+    datt = np.zeros(lay.n_attitude + lay.n_wheels)
     bad = reel_rows(np.ascontiguousarray(t, float), np.ascontiguousarray(Y, float), p, out, acc, datt)
     d = diag.compute(model, t, Y)
     return out, d, bad
