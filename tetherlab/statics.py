@@ -46,7 +46,7 @@ class Equilibrium:
     residual_N: float  # max |m_i d''_i| at the solution
     constraint_m: float  # distance of the end mass from its required position
     iterations: int  # Newton iterations, over every stage
-    method: str = "newton"  # "newton" from the sagging guess, "shooting" (the discrete catenary, polished) or "chord" (one rod)
+    method: str = "newton"  # "newton" from the sagging guess, "shooting" (the discrete catenary, polished), "trust-region" (from the caller's guess) or "chord" (one rod)
 
     @property
     def tension_N(self) -> np.ndarray:
@@ -239,6 +239,23 @@ def _shoot_from(jn, miss, joints_of, force, max_iter):
     return None
 
 
+def hang_joints(root_m, lengths_m, masses_kg, p, g_m_s2, tip_load_N) -> np.ndarray:
+    """Joints (n + 1, 3) of the tether hanging free from ``root_m`` under uniform gravity: the
+    march of :func:`shot_joints` with the pull on the end mass known, J_n = -tip_load_N."""
+    lengths = np.asarray(lengths_m, float)
+    weights = np.asarray(masses_kg, float)[:, None] * np.asarray(g_m_s2, float)[None, :]
+    ea = ParamView(p).rods.ea_N
+    jn = -np.asarray(tip_load_N, float)
+    below = np.cumsum(weights[::-1], axis=0)[::-1]
+    j_prev = jn[None, :] - below
+    s = j_prev + np.vstack([j_prev[1:], jn[None, :]])
+    mag = np.linalg.norm(s, axis=1)
+    if not np.all(mag > 0.0):
+        raise ValueError("hang_joints: a rod with no tension (nothing hangs from it)")
+    rods = (lengths * (1.0 + 0.5 * mag / ea))[:, None] * (-s / mag[:, None])
+    return np.asarray(root_m, float)[None, :] + np.vstack([np.zeros((1, 3)), np.cumsum(rods, axis=0)])
+
+
 class _NoConvergence(Exception):
     """A Newton run that ended without meeting its tolerances (message: why)."""
 
@@ -415,6 +432,8 @@ def solve(
     newton_x = None
     x = None
     try:
+        if guess_joints is not None:
+            raise _NoConvergence("a guess from the caller goes to the trust region directly")
         x, f, it = _plain_newton(evaluate, x0, f0, converged, max_iter)
         evaluate(x)
         if n > 1 and float(ParamView(p).rod_scratch.fe[:n].min()) < 0.0:
@@ -438,6 +457,14 @@ def solve(
                         method = "shooting"
                     except (_NoConvergence, np.linalg.LinAlgError):
                         x = None
+        if x is None and guess_joints is not None:
+            # a guess that is already the answer leaves the plain solve at its round-off floor,
+            # where no full step lowers the residual: the trust region accepts it there
+            try:
+                x, f, it = _trust_newton(evaluate, x0, f0, converged, max_iter)
+                method = "trust-region"
+            except (_NoConvergence, np.linalg.LinAlgError):
+                x = None
         if x is None and n == 1:  # one rod: its vector is the chord; only R_f is unknown
             xs = unknowns(np.vstack([r0, rf]))
             fs = evaluate(xs)
