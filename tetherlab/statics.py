@@ -14,7 +14,11 @@ sum 2 sqrt3 d''_i vanishes too, so every mass of the model is at rest: a static 
 R_f enters the kernel as the ``applied_force`` effect on the tip body, so the reaction solve of
 the dynamics gives the joint reactions J_k (the tension along the tether) and the end reactions.
 The equations are solved by Newton's method with a finite-difference Jacobian (the residual is
-affine in R_f, so those columns are exact).  Derivation and notation: docs/catenary.md.
+affine in R_f, so those columns are exact).  Where that fails (a stiff tether that must sag has no
+tension in the sagging guess, hence no transverse stiffness), the discrete elastic catenary found
+by shooting on the end pull (uniform gravity) starts a trust-region Newton on the same equations
+(docs/catenary.md section 3.1).  :func:`hang_joints` is the tether hanging free, the start of
+``initial.release`` (docs/hanging-chain.md).  Derivation and notation: docs/catenary.md.
 """
 
 from __future__ import annotations
