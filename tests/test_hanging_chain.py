@@ -292,18 +292,19 @@ def _zero_amplitude(n, mode, model="paper"):
 def test_lateral_mode_against_rigid_chain_of_hanging_lengths(n):
     # Linearised about the vertical hang, the rods' lateral motion is that of rigid uniform bars
     # of the hanging (stretched) lengths: axial and lateral motions decouple by symmetry.
-    # Budget: RADAU5 at rtol 1e-12 and the fit, 1e-8 measured spread over n; the amplitude
-    # correction's remainder O(A^4) ~ 1e-13.
+    # Budget (references/gates.toml, hanging_chain_lateral_modes): the extrapolation's A^4
+    # remainder 1.6e-10 plus integration and fit 1.4e-12; measured at most 3.2e-10 over n = 4 ... 16
+    # and both models; threshold 2e-9.
     for mode in (1, 2) if n >= 8 else (1,):
         w0, w_1cm, ell = _zero_amplitude(n, mode)
         w_chain = chain_modes(ell, np.full(n, MASS_KG / n), TIP_KG, G)[0][mode - 1]
-        assert abs(w0 / w_chain - 1.0) < 2e-8, (mode, w0 / w_chain - 1.0)
+        assert abs(w0 / w_chain - 1.0) < 2e-9, (mode, w0 / w_chain - 1.0)
         # the stretch offset: against bars of the unstretched lengths the rods are slower by
         # about half the mean strain (-4.95e-7 here: omega ~ sqrt(g / l))
         w_unstretched = uniform_chain_modes(n, L_M, MASS_KG, TIP_KG, G)[0][mode - 1]
         offset = w_chain / w_unstretched - 1.0
         assert -6e-7 < offset < -4e-7
-        assert abs(w0 / w_unstretched - 1.0 - offset) < 2e-8
+        assert abs(w0 / w_unstretched - 1.0 - offset) < 2e-9
 
 
 def test_lateral_mode_energy_model_same_as_paper():
@@ -312,7 +313,7 @@ def test_lateral_mode_energy_model_same_as_paper():
     n = 8
     w0, _, ell = _zero_amplitude(n, 1, model="energy")
     w_chain = chain_modes(ell, np.full(n, MASS_KG / n), TIP_KG, G)[0][0]
-    assert abs(w0 / w_chain - 1.0) < 2e-8, w0 / w_chain - 1.0
+    assert abs(w0 / w_chain - 1.0) < 2e-9, w0 / w_chain - 1.0
 
 
 def test_lateral_mode_against_bessel_observed_order_two():
@@ -327,7 +328,7 @@ def test_lateral_mode_against_bessel_observed_order_two():
 
 def test_lateral_mode_negative_control_eq20_printed():
     # The printed eq. 20 gives the rods the wrong transverse inertia: the same measurement sees
-    # it far outside the 2e-8 budget.
+    # it far outside the 2e-9 budget (4.8e-2 measured at 8 rods).
     from tetherlab import mutants
 
     n = 8
@@ -344,6 +345,7 @@ def test_lateral_mode_many_rods(n):
     for mode in (1, 2):
         w0, _, ell = _zero_amplitude(n, mode)
         w_chain = chain_modes(ell, np.full(n, MASS_KG / n), TIP_KG, G)[0][mode - 1]
+        # the gate's budget (2e-9) is measured up to 16 rods; many rods are held to 10 x it
         assert abs(w0 / w_chain - 1.0) < 2e-8
         w_unstretched = uniform_chain_modes(n, L_M, MASS_KG, TIP_KG, G)[0][mode - 1]
         # against Bessel: the bars' own error (order 2, from the oracle) plus the stretch offset
