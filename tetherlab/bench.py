@@ -157,6 +157,9 @@ EXTRA_SECTIONS = (
     ("forest_newton", "RADAU5 on a forest (two bench-libration-like systems, D = 2e4 N s): dense against the "
                       "structured Newton matrix, per simulated second against the rods per tether; last rows: "
                       "fitted exponents (docs/integrators.md 13)"),
+    ("hanging_chain", "Hanging chain with a tip mass, 35 s, RADAU5: wall time (set-up included) to reach 1e-4 and "
+                      "1e-5 in the first lateral frequency from the mode start, the angle release and the held start "
+                      "(docs/hanging-chain.md 4); last rows: fitted exponents in n"),
     ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity"),
     ("igrf", "IGRF-14 field: cost of one evaluation against the degree (target: degree 13 in a few us)"),
     ("rigid", "Right-hand-side cost: rigid root + 3 wheels + 4 tethers against the point-mass hub"),

@@ -14,7 +14,11 @@ sum 2 sqrt3 d''_i vanishes too, so every mass of the model is at rest: a static 
 R_f enters the kernel as the ``applied_force`` effect on the tip body, so the reaction solve of
 the dynamics gives the joint reactions J_k (the tension along the tether) and the end reactions.
 The equations are solved by Newton's method with a finite-difference Jacobian (the residual is
-affine in R_f, so those columns are exact).  Derivation and notation: docs/catenary.md.
+affine in R_f, so those columns are exact).  Where that fails (a stiff tether that must sag has no
+tension in the sagging guess, hence no transverse stiffness), the discrete elastic catenary found
+by shooting on the end pull (uniform gravity) starts a trust-region Newton on the same equations
+(docs/catenary.md section 3.1).  :func:`hang_joints` is the tether hanging free, the start of
+``initial.release`` (docs/hanging-chain.md).  Derivation and notation: docs/catenary.md.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .forces import applied_force
+from .forces import applied_force, uniform_gravity
 from .model.params import MUT_HOLD_1PC, ParamView
 from .system import Model, TetherSpec, build_model
 from .tether.solve import accelerations
@@ -45,7 +49,8 @@ class Equilibrium:
     strain: np.ndarray  # (n,)
     residual_N: float  # max |m_i d''_i| at the solution
     constraint_m: float  # distance of the end mass from its required position
-    iterations: int
+    iterations: int  # Newton iterations, over every stage
+    method: str = "newton"  # "newton" from the sagging guess, "shooting" (the discrete catenary, polished), "trust-region" (from the caller's guess) or "chord" (one rod)
 
     @property
     def tension_N(self) -> np.ndarray:
@@ -131,6 +136,220 @@ def sagging_guess(root_m, tip_m, length_m: float, n: int, down=(0.0, 0.0, -1.0))
     return np.column_stack([np.interp(targets, s, pts[:, c]) for c in range(3)])
 
 
+def _uniform_loads(p, slot):
+    """(g vector, constant force on the end mass) when every load of the model is uniform gravity
+    or a constant force on the end mass; None otherwise (loads that depend on where a rod is)."""
+    v = ParamView(p)
+    g = np.zeros(3)
+    tip_force = np.zeros(3)
+    for e in v.effects:
+        if e.code == uniform_gravity.CODE:
+            g[2] -= p[e.par_offset]
+        elif e.code == applied_force.CODE and int(p[e.par_offset + applied_force.PAR_BODY]) == 1:
+            if e.par_offset + applied_force.PAR_F != slot:
+                tip_force += p[e.par_offset + applied_force.PAR_F : e.par_offset + applied_force.PAR_F + 3]
+        else:
+            return None
+    return g, tip_force
+
+
+def shot_joints(root_m, tip_m, lengths_m, masses_kg, ea_N, g_m_s2, tip_load_N, *, max_iter: int = 60):
+    """Joints (n + 1, 3) of the chain of straight elastic rods hanging between ``root_m`` and
+    ``tip_m`` under uniform gravity, by shooting on the tether's pull on the end mass J_n.
+
+    Marching from the end mass to the root, rod i balances its weight with its end reactions,
+    J_{i-1} = J_i - m_i g, lies along -(J_{i-1} + J_i) and is stretched by F_e = |J_{i-1} + J_i| / 2
+    (docs/catenary.md section 3: the equilibrium of every TMED rod under a uniform load); three
+    equations put the last joint on the root.  Newton on those three unknowns, damped, from a pull
+    along the chord of the weight of the whole system.  This is the discrete elastic catenary, so
+    it is exact for the model under uniform gravity; the caller still polishes the answer with the
+    model's own equations.  Returns (joints, J_n), or None if the shooting does not converge (a tether with a slack point)."""
+    r0 = np.asarray(root_m, float)
+    rf = np.asarray(tip_m, float)
+    lengths = np.asarray(lengths_m, float)
+    weights = np.asarray(masses_kg, float)[:, None] * np.asarray(g_m_s2, float)[None, :]
+    ea = np.asarray(ea_N, float)
+    n = lengths.size
+    total = float(lengths.sum())
+    # J_{i-1} = J_n - (weights of rods i..n): suffix sums
+    below = np.cumsum(weights[::-1], axis=0)[::-1]  # below[i] = sum_{k >= i} W_k (0-based)
+
+    def joints_of(jn):
+        j_prev = jn[None, :] - below  # J_{i-1} for rods i = 1..n (0-based row i-1)
+        j_next = np.vstack([j_prev[1:], jn[None, :]])  # J_i
+        s = j_prev + j_next
+        mag = np.linalg.norm(s, axis=1)
+        if not np.all(mag > 0.0):
+            return None
+        u = -s / mag[:, None]
+        rods = (lengths * (1.0 + 0.5 * mag / ea))[:, None] * u
+        return np.vstack([rf[None, :] - np.cumsum(rods[::-1], axis=0)[::-1], rf[None, :]])
+
+    def miss(jn):
+        jts = joints_of(jn)
+        return None if jts is None else (jts[0] - r0) / total
+
+    weight = float(np.linalg.norm(below[0])) + float(np.linalg.norm(np.asarray(tip_load_N, float)))
+    force = max(weight, 1e-300)
+    chord = (r0 - rf) / max(float(np.linalg.norm(r0 - rf)), 1e-300)
+    g_hat = np.asarray(g_m_s2, float) / max(float(np.linalg.norm(g_m_s2)), 1e-300)
+    # starts: pulls along the chord (a taut tether), down (the tether reaching the end mass from
+    # below: a loop hanging under it), up, and half-way between, each at multiples of the weight
+    # from 0.003 (a loop whose bottom carries almost nothing) to 30 (a taut, stretched tether)
+    def unit(vec):
+        return vec / max(float(np.linalg.norm(vec)), 1e-300)
+
+    dirs = (chord, g_hat, -g_hat, unit(g_hat + chord), unit(chord - g_hat))
+    starts = [s * force * dvec for s in (1.0, 0.3, 3.0, 30.0, 0.03, 0.003) for dvec in dirs]
+    for jn in starts:
+        found = _shoot_from(jn, miss, joints_of, force, max_iter)
+        if found is not None:
+            return found
+    return None
+
+
+def _shoot_from(jn, miss, joints_of, force, max_iter):
+    """Damped Newton on the three components of J_n from one start (see :func:`shot_joints`)."""
+    f = miss(jn)
+    if f is None:
+        return None
+    for _ in range(max_iter):
+        if float(np.max(np.abs(f))) < 1e-15:
+            return joints_of(jn), jn
+        jac = np.empty((3, 3))
+        for c in range(3):
+            step = 1e-7 * max(force, float(np.linalg.norm(jn)))
+            jp = jn.copy()
+            jp[c] += step
+            fp = miss(jp)
+            if fp is None:
+                return None
+            jac[:, c] = (fp - f) / step
+        try:
+            dj = np.linalg.solve(jac, -f)
+        except np.linalg.LinAlgError:
+            return None
+        lam = 1.0
+        norm0 = float(np.linalg.norm(f))
+        while lam > 1e-10:
+            fn = miss(jn + lam * dj)
+            if fn is not None and float(np.linalg.norm(fn)) < norm0:
+                break
+            lam *= 0.5
+        else:
+            # the round-off floor of the miss (1e-16 of the length) ends the march too
+            return (joints_of(jn), jn) if norm0 < 1e-13 else None
+        jn, f = jn + lam * dj, fn
+    return None
+
+
+def hang_joints(root_m, lengths_m, masses_kg, p, g_m_s2, tip_load_N) -> np.ndarray:
+    """Joints (n + 1, 3) of the tether hanging free from ``root_m`` under uniform gravity: the
+    march of :func:`shot_joints` with the pull on the end mass known, J_n = -tip_load_N."""
+    lengths = np.asarray(lengths_m, float)
+    weights = np.asarray(masses_kg, float)[:, None] * np.asarray(g_m_s2, float)[None, :]
+    ea = ParamView(p).rods.ea_N
+    jn = -np.asarray(tip_load_N, float)
+    below = np.cumsum(weights[::-1], axis=0)[::-1]
+    j_prev = jn[None, :] - below
+    s = j_prev + np.vstack([j_prev[1:], jn[None, :]])
+    mag = np.linalg.norm(s, axis=1)
+    if not np.all(mag > 0.0):
+        raise ValueError("hang_joints: a rod with no tension (nothing hangs from it)")
+    rods = (lengths * (1.0 + 0.5 * mag / ea))[:, None] * (-s / mag[:, None])
+    return np.asarray(root_m, float)[None, :] + np.vstack([np.zeros((1, 3)), np.cumsum(rods, axis=0)])
+
+
+class _NoConvergence(Exception):
+    """A Newton run that ended without meeting its tolerances (message: why)."""
+
+
+def _fd_jacobian(evaluate, x, f):
+    """Forward differences in scaled units: 1e-7 of a rod's size, or of the 0.1 %-strain force."""
+    jac = np.empty((x.size, x.size))
+    for j in range(x.size):
+        step = 1e-7
+        xp = x.copy()
+        xp[j] += step
+        fp = evaluate(xp)
+        if fp is None:  # the forward point leaves the model: difference backwards
+            xp[j] -= 2 * step
+            fp = 2 * f - evaluate(xp)
+        jac[:, j] = (fp - f) / step
+    return jac
+
+
+def _plain_newton(evaluate, x, f, converged, max_iter):
+    """Newton with backtracking on the residual norm: the solve of the first versions, kept
+    step for step so that every equilibrium it finds stays bit for bit what it was."""
+    it = 0
+    for it in range(1, max_iter + 1):
+        jac = _fd_jacobian(evaluate, x, f)
+        dx = np.linalg.solve(jac, -f)
+        norm0 = np.linalg.norm(f)
+        lam = 1.0
+        while True:  # backtracking: take the largest step that lowers the residual
+            xn = x + lam * dx
+            fn = evaluate(xn)
+            if fn is not None and (np.linalg.norm(fn) < norm0 or lam < 1e-3):
+                break
+            lam *= 0.5
+            if lam < 1e-6:
+                raise _NoConvergence("Newton stalled (no step lowers the residual)")
+        x, f = xn, fn
+        if converged(f, dx, lam == 1.0):
+            return x, f, it
+    raise _NoConvergence(f"no convergence in {max_iter} Newton iterations")
+
+
+def _trust_newton(evaluate, x, f, converged, max_iter):
+    """Newton globalised by a Levenberg-Marquardt trust region on the scaled residual.
+
+    Each iteration tries the full Newton step first and keeps it when it lowers |f|; otherwise it
+    solves the damped least-squares problem min |J dx + f|^2 + mu |D dx|^2 (D: the column norms
+    of J, Marquardt's scaling) with mu raised until the residual falls.  It never accepts a step
+    that raises the residual (the plain solve's last resort does), so it cannot wander off; where
+    the Jacobian is singular (a straight tether with no tension has no transverse stiffness) the
+    damped step is still defined.  Returns (x, f, iterations)."""
+    mu = 0.0
+    it = 0
+    for it in range(1, max_iter + 1):
+        jac = _fd_jacobian(evaluate, x, f)
+        norm0 = float(np.linalg.norm(f))
+        try:
+            dx = np.linalg.solve(jac, -f)
+        except np.linalg.LinAlgError:
+            dx = None
+        fn = None
+        full = False
+        if dx is not None and np.all(np.isfinite(dx)):
+            fn = evaluate(x + dx)
+            full = fn is not None and float(np.linalg.norm(fn)) < norm0
+            if not full and fn is not None and converged(fn, dx, True) and converged(f, dx, True):
+                return x, f, it  # at the round-off floor: the residual cannot fall any more
+        if not full:
+            scale = np.linalg.norm(jac, axis=0)
+            scale[scale == 0.0] = max(float(scale.max()), 1.0)
+            mu = max(mu, 1e-6)
+            aug_rhs = np.concatenate([-f, np.zeros(x.size)])
+            for _ in range(60):
+                aug = np.vstack([jac, math.sqrt(mu) * np.diag(scale)])
+                dx = np.linalg.lstsq(aug, aug_rhs, rcond=None)[0]
+                fn = evaluate(x + dx)
+                if fn is not None and float(np.linalg.norm(fn)) < norm0:
+                    break
+                mu *= 4.0
+            else:
+                raise _NoConvergence("the trust region shrank to nothing (no step lowers the residual)")
+            mu /= 3.0
+        else:
+            mu = 0.0
+        x, f = x + dx, fn
+        if converged(f, dx, full):
+            return x, f, it
+    raise _NoConvergence(f"no convergence in {max_iter} trust-region Newton iterations")
+
+
 def solve(
     model: Model,
     root_m,
@@ -146,6 +365,13 @@ def solve(
     ``model`` must have a fixed root, one tether with an end mass and an ``applied_force`` on
     it (see :func:`held_model`).  ``force_tol_N``: the largest rod force imbalance accepted
     (default 1e-12 EA, about ten times the round-off of the forces).
+
+    Newton from the sagging guess first (bit for bit the solve of the first versions).  When it
+    fails, which it does for stiff tethers (EA a million times the weight) that must sag, and the
+    loads are uniform gravity and constant forces on the end mass, the discrete elastic catenary
+    found by shooting on three unknowns (:func:`shot_joints`) is the start of a Newton iteration
+    globalised by a trust region (:func:`_trust_newton`), which meets the same tolerances on the
+    model's own equations (docs/catenary.md section 3.1).
     """
     if not model.root_fixed:
         raise ValueError("model.root_fixed: expected True (a fixed root, the nail), got False")
@@ -168,6 +394,8 @@ def solve(
     tol = 1e-12 * tether.ea_n if force_tol_N is None else float(force_tol_N)
 
     p = model.fresh_params()
+    v = ParamView(p)
+    ea_rods = v.rods.ea_N.copy()  # the shooting's EA per rod
     h = 3 * (1 + n)
     q = np.zeros(h)
     qd = np.zeros(h)
@@ -185,50 +413,84 @@ def solve(
         res[3 * n :] = (2.0 * SQ3 * q[3:].reshape(n, 3).sum(axis=0) - span) / total
         return res
 
+    def converged(f, dx, full):
+        force_res = float(np.max(np.abs(f[: 3 * n]))) * f_scale
+        miss = float(np.max(np.abs(f[3 * n :]))) * total
+        return force_res < tol and miss < 1e-14 * total and full and np.max(np.abs(dx)) < 1e-6
+
+    def unknowns(joints):
+        x = np.zeros(3 * n + 3)
+        x[: 3 * n] = (np.diff(joints, axis=0) / (2.0 * SQ3)).ravel() / d_scale
+        return x
+
     joints = sagging_guess(r0, rf, total, n, down) if guess_joints is None else np.asarray(guess_joints, float)
     if joints.shape != (n + 1, 3):
         raise ValueError(f"guess_joints: expected shape {(n + 1, 3)}, got {joints.shape}")
-    x = np.zeros(3 * n + 3)
-    x[: 3 * n] = (np.diff(joints, axis=0) / (2.0 * SQ3)).ravel() / d_scale
-    f = evaluate(x)
-    if f is None:
+    x0 = unknowns(joints)
+    f0 = evaluate(x0)
+    if f0 is None:
         raise ValueError("guess_joints: the starting shape is outside the model (a rod collapsed)")
-    it = 0
-    for it in range(1, max_iter + 1):
-        jac = np.empty((x.size, x.size))
-        for j in range(x.size):
-            step = 1e-7  # scaled units: 1e-7 of a rod's size, or of the 0.1 %-strain force
-            xp = x.copy()
-            xp[j] += step
-            fp = evaluate(xp)
-            if fp is None:  # the forward point leaves the model: difference backwards
-                xp[j] -= 2 * step
-                fp = 2 * f - evaluate(xp)
-            jac[:, j] = (fp - f) / step
-        dx = np.linalg.solve(jac, -f)
-        norm0 = np.linalg.norm(f)
-        lam = 1.0
-        while True:  # backtracking: take the largest step that lowers the residual
-            xn = x + lam * dx
-            fn = evaluate(xn)
-            if fn is not None and (np.linalg.norm(fn) < norm0 or lam < 1e-3):
-                break
-            lam *= 0.5
-            if lam < 1e-6:
-                raise ValueError("statics.solve: Newton stalled (no step lowers the residual)")
-        x, f = xn, fn
-        force_res = float(np.max(np.abs(f[: 3 * n]))) * f_scale
-        miss = float(np.max(np.abs(f[3 * n :]))) * total
-        if force_res < tol and miss < 1e-14 * total and lam == 1.0 and np.max(np.abs(dx)) < 1e-6:
-            break
-    else:
-        raise ValueError(
-            f"statics.solve: no convergence in {max_iter} Newton iterations "
-            f"(force residual {force_res:.3g} N, tolerance {tol:.3g} N)"
+    method = "newton"
+    first_error = None
+    loads = None
+    newton_x = None
+    x = None
+    try:
+        if guess_joints is not None:
+            raise _NoConvergence("a guess from the caller goes to the trust region directly")
+        x, f, it = _plain_newton(evaluate, x0, f0, converged, max_iter)
+        evaluate(x)
+        if n > 1 and float(ParamView(p).rod_scratch.fe[:n].min()) < 0.0:
+            # a strut: Newton found the unstable branch that pushes on the end mass (seen for
+            # stiff tethers held at their length); a hanging, tensioned one is looked for below
+            raise _NoConvergence("Newton from the guess found a compressed tether")
+    except (_NoConvergence, np.linalg.LinAlgError) as first:
+        newton_x = x if str(first).startswith("Newton from the guess found a compressed") else None
+        x = None
+        loads = _uniform_loads(p, slot) if guess_joints is None else None
+        if loads is not None:  # the discrete catenary by shooting, polished on the model itself
+            tip_load = loads[1] + tether.tip_mass_kg * loads[0]
+            shot = shot_joints(r0, rf, model.rod_lengths(), masses, ea_rods, loads[0], tip_load)
+            if shot is not None:
+                xs = unknowns(shot[0])
+                xs[3 * n :] = -(shot[1] + tip_load) / f_scale  # the end mass at rest: R_f + J_n + loads = 0
+                fs = evaluate(xs)
+                if fs is not None:
+                    try:
+                        x, f, it = _trust_newton(evaluate, xs, fs, converged, max_iter)
+                        method = "shooting"
+                    except (_NoConvergence, np.linalg.LinAlgError):
+                        x = None
+        if x is None and guess_joints is not None:
+            # a guess that is already the answer leaves the plain solve at its round-off floor,
+            # where no full step lowers the residual: the trust region accepts it there
+            try:
+                x, f, it = _trust_newton(evaluate, x0, f0, converged, max_iter)
+                method = "trust-region"
+            except (_NoConvergence, np.linalg.LinAlgError):
+                x = None
+        if x is None and n == 1:  # one rod: its vector is the chord; only R_f is unknown
+            xs = unknowns(np.vstack([r0, rf]))
+            fs = evaluate(xs)
+            if fs is not None:
+                try:
+                    x, f, it = _trust_newton(evaluate, xs, fs, converged, max_iter)
+                    method = "chord"
+                except (_NoConvergence, np.linalg.LinAlgError):
+                    x = None
+        first_error = str(first)
+    if first_error is not None and x is None and newton_x is not None:
+        x = newton_x  # no tensioned equilibrium found: the strut it is (a single rod too short, say)
+        method = "newton"
+    if first_error is not None and x is None:
+        why = (
+            "the shooting found no discrete catenary (a tether folded back on itself, or slack)"
+            if loads is not None
+            else "no fallback for these loads (the shooting is for uniform gravity and constant forces on the end mass)"
         )
-    evaluate(x)  # leaves the reactions of the solution in the scratch area of p
+        raise ValueError(f"statics.solve: no convergence: Newton from the sagging guess ({first_error}); {why}")
+    f = evaluate(x)  # leaves the reactions of the solution in the scratch area of p
     hold = p[slot : slot + 3].copy()
-    v = ParamView(p)
     if v.defect == MUT_HOLD_1PC:  # tetherlab.mutants' negative control only, never a user's
         hold *= 1.01
     reactions = v.joint_scratch.j_N[: n + 1].copy()
@@ -248,4 +510,6 @@ def solve(
         residual_N=float(np.max(np.abs(m3 * acc[3:]))),
         constraint_m=float(np.linalg.norm(joints[-1] - rf)),
         iterations=it,
+        method=method,
     )
+

@@ -26,8 +26,40 @@ def static_start(scene, root, tethers, specs, effects, central, nq, y0):
     orbital = any(e.name == "central_gravity" for e in scene.effects) and np.linalg.norm(r0) > 0
     down = -r0 / np.linalg.norm(r0) if orbital else np.array([0.0, 0.0, -1.0])  # for the first guess
     held = held_model(specs[0], effects, central, quadrature=nq, root_name=root.name)
+    release = t.initial.release
+    if release is not None:
+        return _released(held, specs[0], r0, tip_r, release, f"tethers.{t.name}.initial.release")
     try:
         eq = solve(held, r0, tip_r, down=down)
     except ValueError as exc:
         raise SceneError(path, "a tether with a static equilibrium between its placed ends", str(exc)) from None
     return eq.y, eq.holding_force_N
+
+
+def _released(held, spec, r0, tip_r, release, path):
+    """(y0, R_f of the hang) of a tether released from its free hang (tetherlab/initial/release.py).
+
+    The placed end mass gives only the vertical plane of the swing (the horizontal direction from
+    the root to it; the scene's +x when it is placed on the vertical)."""
+    from ..statics import _force_slot, _uniform_loads, hang_joints, solve
+    from .release import consistent_lengths, released_state
+
+    g_vec, tip_force = _uniform_loads(held.p, _force_slot(held)) or (None, None)
+    if g_vec is None or not np.linalg.norm(g_vec) > 0.0:
+        raise SceneError(path, "a tether hanging under uniform_gravity alone (and constant forces on its end mass)",
+                         "other position-dependent effects in [effects]")  # fmt: skip
+    tip_load = tip_force + spec.tip_mass_kg * g_vec
+    joints = hang_joints(r0, held.rod_lengths(), held.rod_masses(), held.p, g_vec, tip_load)
+    try:
+        eq = solve(held, r0, joints[-1], guess_joints=joints)
+    except ValueError as exc:
+        raise SceneError(path, "a tether with a static hang under uniform gravity", str(exc)) from None
+    down = g_vec / np.linalg.norm(g_vec)
+    side = np.asarray(tip_r, float) - r0
+    side = side - (side @ down) * down
+    if not np.linalg.norm(side) > 1e-12 * spec.length_m:
+        side = np.array([1.0, 0.0, 0.0]) - down[0] * down
+    toward = side / np.linalg.norm(side)
+    y = released_state(held, eq.y, release, g_vec, spec.tip_mass_kg, toward, path)
+    y, _ = consistent_lengths(held, y, held.fresh_params(), _force_slot(held))
+    return y, eq.holding_force_N

@@ -162,6 +162,11 @@ def _check_run(scene: Scene) -> None:
         if len(tethers) != 1:
             raise SceneError(f"tethers.{t.name}.initial.shape", "'equilibrium' only in a scene with a single tether",
                              f"{len(tethers)} tethers")  # fmt: skip
+        if t.initial is not None and t.initial.release is not None and not any(e.name == "uniform_gravity" for e in scene.effects):
+            raise SceneError(
+                f"tethers.{t.name}.initial.release", "a scene with uniform_gravity in [effects]: the release perturbs "
+                "the tether hanging under it", "no uniform_gravity",
+            )  # fmt: skip
         tip = by_name[t.to_body].state(mu)
         if tip is not None and np.any(tip[1] != 0.0):
             raise SceneError(

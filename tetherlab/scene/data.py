@@ -165,6 +165,19 @@ class Body:
 
 
 @dataclass(frozen=True)
+class Release:
+    """A lateral perturbation of the free-hanging equilibrium (shape 'equilibrium' with
+    ``release``; docs/scenes.md, docs/hanging-chain.md section 3): every rod turned by
+    ``angle_rad`` about the root, or the rods laid along lateral mode ``mode`` of the hanging
+    chain with the end mass moved sideways by ``amplitude_m``; then every rod's strain set to the
+    tension it carries at the release, so the release rings no axial mode."""
+
+    angle_rad: float | None = None
+    mode: int = 0
+    amplitude_m: float = 0.0
+
+
+@dataclass(frozen=True)
 class InitialShape:
     """Initial layout of a tether laid out from one placed end.
 
@@ -177,6 +190,7 @@ class InitialShape:
     phi_rad: float | tuple[float, ...] = 0.0
     side: str = "up"
     strain: float = 0.0
+    release: Release | None = None  # shape 'equilibrium' only: released from the free hang
 
     def rod_angles_rad(self, rods: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """(theta, phi) of every rod, whatever the shape."""

@@ -93,6 +93,17 @@ def _rigid_dict(r: Rigid) -> dict[str, Any]:
     return out
 
 
+def _equilibrium_dict(s: InitialShape) -> dict[str, Any]:
+    out: dict[str, Any] = {"shape": s.shape}
+    r = s.release
+    if r is not None:
+        out["release"] = (
+            {"angle": format_si(r.angle_rad, ANGLE)} if r.angle_rad is not None
+            else {"mode": r.mode, "amplitude": format_si(r.amplitude_m, LENGTH)}
+        )
+    return out
+
+
 def _angles_dict(value) -> Any:
     if isinstance(value, tuple):
         return [format_si(x, ANGLE) for x in value]
@@ -182,7 +193,7 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
             # both ends explicitly is not tripped by a shape nobody asked for.
             if t.initial is not None and t.initial != InitialShape():
                 s = t.initial
-                entry["initial"] = {"shape": s.shape} if s.shape == EQUILIBRIUM else {
+                entry["initial"] = _equilibrium_dict(s) if s.shape == EQUILIBRIUM else {
                     "shape": s.shape,
                     "theta": _angles_dict(s.theta_rad),
                     "phi": _angles_dict(s.phi_rad),

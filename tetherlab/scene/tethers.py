@@ -31,6 +31,7 @@ from .data import (
     TETHER_MODELS,
     Body,
     InitialShape,
+    Release,
     Tether,
 )
 from .keys import (
@@ -164,17 +165,21 @@ def _angles(value: Any, key: str, shape: str, rods: int) -> float | tuple[float,
 
 
 def _parse_initial(value: Any, path: str, rods: int) -> InitialShape:
-    table = _table(value, path, ("shape", "theta", "phi", "side", "strain"))
+    table = _table(value, path, ("shape", "theta", "phi", "side", "strain", "release"))
     shape = _choice(table.get("shape", "straight"), f"{path}.shape", SHAPES)
     if shape == EQUILIBRIUM:
-        # the static solve decides every rod's direction and strain: nothing else to give
-        extra = [k for k in table if k != "shape"]
+        # the static solve decides every rod's direction and strain: nothing else to give but
+        # the release from the free hang
+        extra = [k for k in table if k not in ("shape", "release")]
         if extra:
             raise SceneError(
-                f"{path}.{extra[0]}", "no other key with shape 'equilibrium' (the statics solve sets the shape)",
+                f"{path}.{extra[0]}", "no other key than release with shape 'equilibrium' (the statics solve sets the shape)",
                 shown(table[extra[0]]),
             )
-        return InitialShape(EQUILIBRIUM)
+        release = _parse_release(table["release"], f"{path}.release") if "release" in table else None
+        return InitialShape(EQUILIBRIUM, release=release)
+    if "release" in table:
+        raise SceneError(f"{path}.release", "shape = 'equilibrium' with a release (it perturbs the free hang)", f"shape {shape!r}")
     if shape == "rods":
         theta = _angles(_required(table, "theta", path, f"a list of {rods} angles, one per rod"), f"{path}.theta", shape, rods)
         phi = _angles(table["phi"], f"{path}.phi", shape, rods) if "phi" in table else (0.0,) * rods
@@ -190,3 +195,24 @@ def _parse_initial(value: Any, path: str, rods: int) -> InitialShape:
             shown(table.get("strain")),
         )
     return InitialShape(shape, theta, phi, side, strain)
+
+
+def _parse_release(value: Any, path: str) -> Release:
+    """``release = { angle = "5 deg" }`` or ``release = { mode = 1, amplitude = "1 cm" }``."""
+    table = _table(value, path, ("angle", "mode", "amplitude"))
+    if "angle" in table:
+        if "mode" in table or "amplitude" in table:
+            other = "mode" if "mode" in table else "amplitude"
+            raise SceneError(f"{path}.{other}", "either angle, or mode with amplitude, not both", shown(table[other]))
+        angle = to_si(table["angle"], ANGLE, key=f"{path}.angle")
+        if not (math.isfinite(angle) and 0.0 < abs(angle) < 0.5 * math.pi):
+            raise SceneError(f"{path}.angle", "an angle between 0 and 90 deg (either sign), the swing's start", shown(table["angle"]))
+        return Release(angle_rad=angle)
+    if "mode" not in table:
+        raise SceneError(f"{path}.angle", "angle (e.g. '5 deg'), or mode with amplitude (e.g. mode = 1, amplitude = '1 cm')", _NOTHING)
+    mode = _integer(table["mode"], f"{path}.mode", 1)
+    amplitude = _quantity(_required(table, "amplitude", path, "the end mass's sideways displacement (e.g. '1 cm')"),
+                          f"{path}.amplitude", LENGTH)  # fmt: skip
+    if not (math.isfinite(amplitude) and amplitude != 0.0):
+        raise SceneError(f"{path}.amplitude", "a non-zero length (the end mass's sideways displacement)", shown(table["amplitude"]))
+    return Release(mode=mode, amplitude_m=amplitude)

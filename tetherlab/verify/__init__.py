@@ -32,6 +32,7 @@ from .checks import (
     _stiefel_error,
     check_de421,
     check_dop853,
+    check_hanging_chain,
     check_heyoka_orbits,
     check_invariants,
     check_lateral_mode,

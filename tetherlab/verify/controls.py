@@ -10,6 +10,7 @@ from ..report import _fmt
 from .checks import (
     check_de421,
     check_dop853,
+    check_hanging_chain,
     check_heyoka_orbits,
     check_invariants,
     check_lateral_mode,
@@ -24,6 +25,7 @@ PROBES = [
     ("invariants", lambda rows: check_invariants(rows, quick=True), {"tether", "diagnostics", "integrator"}),
     ("lateral", lambda rows: check_lateral_mode(rows, kinds=("paper", "energy")), {"tether", "integrator"}),
     ("catenary", lambda rows: check_catenary_probe(rows), {"tether", "statics"}),
+    ("hanging_chain", lambda rows: check_hanging_chain(rows, ns=(8,), models=("paper",)), {"tether", "integrator"}),
     ("heyoka_orbits", lambda rows: check_heyoka_orbits(rows), {"gravity", "integrator"}),
     ("stiefel", lambda rows: check_stiefel_probe(rows), {"gravity", "moon", "integrator", "dromo"}),
     ("de421", lambda rows: check_de421(rows), {"de421"}),
@@ -167,6 +169,7 @@ _PROBE_GATES = {
     "invariants": ["angular_momentum_internal", "energy_model_energy", "energy_model_power_balance"],
     "lateral": ["lateral_mode_two_rods"],
     "catenary": ["catenary_shape_n64", "catenary_tension_n64", "catenary_order_deviation"],
+    "hanging_chain": ["hanging_chain_lateral_modes"],
     "heyoka_orbits": ["heyoka_orbits_position"],
     "stiefel": ["stiefel_cowell_best_error", "stiefel_dromo_best_error", "stiefel_example1_te_error"],
     "de421": ["de421_fit_error"],

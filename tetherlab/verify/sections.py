@@ -5,6 +5,7 @@ from __future__ import annotations
 from .checks import (
     check_de421,
     check_dop853,
+    check_hanging_chain,
     check_heyoka_orbits,
     check_invariants,
     check_lateral_mode,
@@ -20,6 +21,7 @@ CHECKS = [
     ("vertical", "Local vertical: relative equilibrium (paper section 4.3)", check_vertical),
     ("invariants", "Invariants: angular momentum, energy, power balance (docs/model.md 6)", check_invariants),
     ("lateral", "Two-rod lateral mode (docs/model.md 9)", check_lateral_mode),
+    ("hanging-chain", "Hanging chain with a tip mass: lateral modes (docs/hanging-chain.md)", check_hanging_chain),
     ("gravity", "Gravity effects against heyoka (references/heyoka_orbits)", check_heyoka_orbits),
     ("de421", "DE421 Chebyshev fit (tetherlab/ephemeris.py)", check_de421),
     ("dop853", "DOP853 step-size control (Hairer, Norsett & Wanner II.4)", check_dop853),
@@ -53,6 +55,7 @@ _GATES_OF = {
     "vertical": ("vertical_equilibrium",),
     "invariants": ("angular_momentum_internal", "energy_model_energy", "energy_model_power_balance"),
     "lateral": ("lateral_mode_two_rods",),
+    "hanging-chain": ("hanging_chain_lateral_modes",),
     "gravity": ("heyoka_orbits_position",),
     "de421": ("de421_fit_error",),
     "dop853": ("dop853_work_exponent",),
