@@ -50,23 +50,24 @@ def consistent_lengths(model, y, p, slot=None, iterations: int = 20):
     """y with every rod vector rescaled so that no rod's length accelerates at t = 0 (velocities
     zero), and the scale factors.  Newton on the n length factors, finite-difference Jacobian.
     ``slot``: the holding force's place in ``p``, zeroed (the end mass released); None: no hold."""
-    from ..tether.chain import accelerations
+    from ..tether.solve import accelerations
 
-    n = model.n_rods
-    h = y.size // 2
-    q = y[:h].copy()
-    qd = np.zeros(h)
-    acc = np.zeros(h)
-    d0 = q[3:].reshape(n, 3).copy()
+    lay = model.state
+    n = lay.n_rods
+    rods = lay.rods_d  # the rod vectors, inside q as inside y (q starts the state)
+    q = y[lay.q].copy()
+    qd = np.zeros(lay.n_qt)
+    acc = np.zeros(lay.n_qt)
+    d0 = q[rods].reshape(n, 3).copy()
     u = d0 / np.linalg.norm(d0, axis=1)[:, None]
     if slot is not None:
         p[slot : slot + 3] = 0.0  # released: nothing holds the end mass
 
     def axial(s):
-        q[3:] = (d0 * s[:, None]).ravel()
+        q[rods] = (d0 * s[:, None]).ravel()
         if accelerations(0.0, q, qd, p, acc) != 0:
             raise SceneError("initial.release", "a release whose rods stay in the model", "a rod collapsed")
-        return (acc[3:].reshape(n, 3) * u).sum(axis=1)
+        return (acc[rods].reshape(n, 3) * u).sum(axis=1)
 
     s = np.ones(n)
     f = axial(s)
@@ -86,7 +87,7 @@ def consistent_lengths(model, y, p, slot=None, iterations: int = 20):
         raise SceneError("initial.release", "rod lengths with no axial acceleration at the release (Newton converging)",
                          f"last step {float(np.max(np.abs(step))):.3g} of the rod lengths, axial acceleration {np.max(np.abs(f)) / a_ref:.3g} of the largest")  # fmt: skip
     out = y.copy()
-    out[3:h] = (d0 * s[:, None]).ravel()
+    out[rods] = (d0 * s[:, None]).ravel()
     return out, s
 
 
@@ -96,20 +97,20 @@ def axial_energy_J(model, y, y_consistent):
     ``y`` puts into the axial modes that one from ``y_consistent`` does not."""
     from ..model.params import ParamView
 
-    n = model.n_rods
-    h = y.size // 2
+    lay = model.state
+    n = lay.n_rods
     v = ParamView(model.p)
-    ell = 2.0 * SQ3 * np.linalg.norm(y[3:h].reshape(n, 3), axis=1)
-    ell_c = 2.0 * SQ3 * np.linalg.norm(y_consistent[3:h].reshape(n, 3), axis=1)
+    ell = 2.0 * SQ3 * np.linalg.norm(y[lay.rods_d].reshape(n, 3), axis=1)
+    ell_c = 2.0 * SQ3 * np.linalg.norm(y_consistent[lay.rods_d].reshape(n, 3), axis=1)
     return float(np.sum(v.rods.ea_N / (2.0 * v.rods.length_m) * (ell - ell_c) ** 2))
 
 
 def released_state(held, eq_y, release, g_vec, tip_mass_kg, toward, path):
     """The released state from the hang ``eq_y`` (zero velocities): the rods turned in the
     vertical plane through ``toward`` (a horizontal unit vector), their lengths made consistent."""
-    n = held.n_rods
-    h = eq_y.size // 2
-    d = eq_y[3:h].reshape(n, 3)
+    lay = held.state
+    n = lay.n_rods
+    d = eq_y[lay.rods_d].reshape(n, 3)
     down = g_vec / np.linalg.norm(g_vec)
     ell = 2.0 * SQ3 * np.linalg.norm(d, axis=1)
     if release.angle_rad is not None:
@@ -125,6 +126,6 @@ def released_state(held, eq_y, release, g_vec, tip_mass_kg, toward, path):
                              f"{release.amplitude_m:.6g} m turns a rod by {math.degrees(float(np.max(np.abs(theta)))):.4g} deg")  # fmt: skip
     u = np.sin(theta)[:, None] * toward[None, :] + np.cos(theta)[:, None] * down[None, :]
     y = eq_y.copy()
-    y[3:h] = ((ell / (2.0 * SQ3))[:, None] * u).ravel()
-    y[h:] = 0.0
+    y[lay.rods_d] = ((ell / (2.0 * SQ3))[:, None] * u).ravel()
+    y[lay.qd] = 0.0
     return y

@@ -480,9 +480,9 @@ def _hanging_chain_frequency(n, mode, amplitude_m, model="paper", rtol=1e-12):
     s = load_scene(SCENES / "hanging-chain.toml").replace(**{
         "tethers.main.rods": n, "integrator.rtol": rtol, "integrator.atol": rtol, "tethers.main.model": model,
         "tethers.main.initial.release": {"mode": mode, "amplitude": f"{amplitude_m} m"}})  # fmt: skip
-    y0 = prepare(s).y0
-    h = y0.size // 2
-    ell = 2.0 * math.sqrt(3.0) * np.linalg.norm(y0[3:h].reshape(n, 3), axis=1)
+    prep = prepare(s)
+    y0 = prep.y0
+    ell = 2.0 * math.sqrt(3.0) * np.linalg.norm(y0[prep.model.state.rods_d].reshape(n, 3), axis=1)
     ts = simulate(s, progress=False).timeseries
     guess = continuum_frequencies(10.0, 1.0, 0.5, 9.80665, count=2)[mode - 1]
     w, _, _ = fit_frequencies(ts["t_s"].to_numpy(), ts["tip.x_m"].to_numpy(), [guess])
