@@ -88,12 +88,9 @@ def _default_out(scene) -> Path:
 
 
 def _fmt_time(t_s: float) -> str:
-    """A run time the way a user reads it: seconds, hours or days."""
-    if abs(t_s) >= 2 * 86400.0:
-        return f"{t_s / 86400.0:.4g} d"
-    if abs(t_s) >= 2 * 3600.0:
-        return f"{t_s / 3600.0:.4g} h"
-    return f"{t_s:.6g} s"
+    from .regime import format_time
+
+    return format_time(t_s)
 
 
 def stop_reason(record: dict) -> str:

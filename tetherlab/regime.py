@@ -36,12 +36,17 @@ SLOWDOWN_FACTOR = 100.0
 EPS = float(np.finfo(float).eps)
 
 
-def _fmt_t(t_s: float) -> str:
+def format_time(t_s: float) -> str:
+    """A run time the way a user reads it: seconds, hours or days."""
     if abs(t_s) >= 2 * 86400.0:
-        return f"t = {t_s / 86400.0:.4g} d"
+        return f"{t_s / 86400.0:.4g} d"
     if abs(t_s) >= 2 * 3600.0:
-        return f"t = {t_s / 3600.0:.4g} h"
-    return f"t = {t_s:.6g} s"
+        return f"{t_s / 3600.0:.4g} h"
+    return f"{t_s:.6g} s"
+
+
+def _fmt_t(t_s: float) -> str:
+    return f"t = {format_time(t_s)}"
 
 
 def _tethers(scene_dict: dict) -> dict:

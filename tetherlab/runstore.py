@@ -126,6 +126,19 @@ def _atomic_write_bytes(path: Path, data: bytes) -> None:
         raise
 
 
+def _write_checkpoint(out: Path, **arrays) -> None:
+    """The checkpoint written whole or not at all: a temporary file beside it, then one rename."""
+    fd, tmp = tempfile.mkstemp(dir=out, prefix=".checkpoint-", suffix=".npz")
+    os.close(fd)
+    try:
+        np.savez(tmp, **arrays)
+        os.replace(tmp, out / CHECKPOINT)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
 def _write_json(path: Path, data: dict) -> None:
     from .result import _json_default
 
@@ -506,25 +519,17 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
         y_out.flush()
         arrays = {f"ws{i}": a for i, a in enumerate(state["ws"])}
         ev = np.array(state["events"], dtype=float).reshape(-1, 3)
-        fd, tmp = tempfile.mkstemp(dir=out, prefix=".checkpoint-", suffix=".npz")
-        os.close(fd)
-        try:
-            np.savez(
-                tmp, t=state["t"], h=state["h"], done=done, budget=state["budget"], y=state["y"],
-                stats=state["stats"], ev=state["ev"], resume=state["resume"], events=ev, p=p,
-                sides=np.asarray(state["sides"], float),
-                n_ws=len(state["ws"]), wall_s=wall_before + time.perf_counter() - t_wall,
-                n_chunks=chunks_before, seg_done=state["done"], seg_k=loop["k"], seg_t_a=loop["t_a"],
-                seg_y_in=np.asarray(loop["y_in"], float), seg_k_out=loop["k_out"], seg_budget=loop["budget"],
-                seg_sums=json.dumps(loop["sums"], default=_plain),
-                seg_anchors=json.dumps(loop["anchors"], default=_plain),
-                seg_events=np.array(loop["events"], dtype=float).reshape(-1, 3), **arrays,
-            )  # fmt: skip
-            os.replace(tmp, out / CHECKPOINT)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
+        _write_checkpoint(
+            out, t=state["t"], h=state["h"], done=done, budget=state["budget"], y=state["y"],
+            stats=state["stats"], ev=state["ev"], resume=state["resume"], events=ev, p=p,
+            sides=np.asarray(state["sides"], float),
+            n_ws=len(state["ws"]), wall_s=wall_before + time.perf_counter() - t_wall,
+            n_chunks=chunks_before, seg_done=state["done"], seg_k=loop["k"], seg_t_a=loop["t_a"],
+            seg_y_in=np.asarray(loop["y_in"], float), seg_k_out=loop["k_out"], seg_budget=loop["budget"],
+            seg_sums=json.dumps(loop["sums"], default=_plain),
+            seg_anchors=json.dumps(loop["anchors"], default=_plain),
+            seg_events=np.array(loop["events"], dtype=float).reshape(-1, 3), **arrays,
+        )  # fmt: skip
         last_ck[0] = time.perf_counter()
 
     with _Signals() as sig:
@@ -608,17 +613,9 @@ def _run_sigma_streamed(store: _Store, record: dict, states, p, restart, progres
 
     def save_checkpoint(state):
         states.flush()
-        fd, tmp = tempfile.mkstemp(dir=out, prefix=".checkpoint-", suffix=".npz")
-        os.close(fd)
-        try:
-            arrays = {"sigma_" + name: np.asarray(state[name]) for name in CLOCK_STATE_ARRAYS}
-            scalars = {"sigma_" + name: np.asarray(state[name]) for name in CLOCK_STATE_SCALARS}
-            np.savez(tmp, done=state["k"], wall_s=state["wall_s"], n_chunks=chunks_before, **arrays, **scalars)
-            os.replace(tmp, out / CHECKPOINT)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
+        arrays = {"sigma_" + name: np.asarray(state[name]) for name in CLOCK_STATE_ARRAYS}
+        scalars = {"sigma_" + name: np.asarray(state[name]) for name in CLOCK_STATE_SCALARS}
+        _write_checkpoint(out, done=state["k"], wall_s=state["wall_s"], n_chunks=chunks_before, **arrays, **scalars)
         last_ck[0] = time.perf_counter()
 
     with _Signals() as sig:

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from . import print_markdown
+from .cost_vs_n import fit_exponent
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "studies" / "scenes"
@@ -66,15 +67,6 @@ def run_one(start, n, rtol):
     w, _, _ = fit_frequencies(ts["t_s"].to_numpy(), ts["tip.x_m"].to_numpy(), guesses)
     st = res.stats
     return float(w[0]), float(st["total_wall_s"]), float(st["wall_s"]), int(st["n_accepted"])
-
-
-def fit_exponent(ns, costs):
-    ns = np.asarray(ns, float)
-    c = np.asarray(costs, float)
-    ok = np.isfinite(c) & (c > 0)
-    if ok.sum() < 2:
-        return float("nan")
-    return float(np.polyfit(np.log(ns[ok]), np.log(c[ok]), 1)[0])
 
 
 def bench_rows(rods=(16, 32, 64, 128), starts=("mode", "angle", "held")) -> list[dict]:

@@ -241,23 +241,30 @@ def run(out_dir) -> dict:
     return {"gates": gates, "figures": [str(p) for p in figures], "tables": tables}
 
 
-def main(argv=None) -> int:
+def write_section(out: Path, stem: str, title: str, intro: str, result: dict) -> None:
+    """A verification run's tables, figures and gates as ``out/<stem>.md`` and ``<stem>_gates.json``
+    (the command line of this module and of verification_deorbit)."""
     import json
-    import sys
 
     from ..report import table
 
+    md = [f"# {title}", "", intro, ""]
+    for name, rows in result["tables"]:
+        md += [f"**{name}**", "", table(rows), ""]
+    md += [f"![{Path(p).stem}]({Path(p).resolve().relative_to(out.resolve()).as_posix()})" for p in result["figures"]]
+    (out / f"{stem}.md").write_text("\n".join(md) + "\n")
+    (out / f"{stem}_gates.json").write_text(json.dumps(result["gates"], indent=1))
+    print(json.dumps(result["gates"], indent=1))
+
+
+def main(argv=None) -> int:
+    import sys
+
     argv = sys.argv[1:] if argv is None else argv
     out = Path(argv[0] if argv else "reports/uncertainty")
-    result = run(out)
-    md = ["# Uncertainty machinery against known answers", "",
-          "tetherlab/uncertainty/verification.py (docs/uncertainty.md 6) has the budget of every gate.", ""]
-    for title, rows in result["tables"]:
-        md += [f"**{title}**", "", table(rows), ""]
-    md += [f"![{Path(p).stem}]({Path(p).resolve().relative_to(out.resolve()).as_posix()})" for p in result["figures"]]
-    (out / "uncertainty.md").write_text("\n".join(md) + "\n")
-    (out / "uncertainty_gates.json").write_text(json.dumps(result["gates"], indent=1))
-    print(json.dumps(result["gates"], indent=1))
+    write_section(out, "uncertainty", "Uncertainty machinery against known answers",
+                  "tetherlab/uncertainty/verification.py (docs/uncertainty.md 6) has the budget of every gate.",
+                  run(out))  # fmt: skip
     return 0
 
 

@@ -45,7 +45,6 @@ its gates as JSON and the figures.
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 import time
@@ -53,8 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..report import table as _md_table
-from .verification import ROOT
+from .verification import ROOT, write_section
 
 STUDY = ROOT / "studies" / "uncertainty" / "deorbit_verify.toml"
 NEGLECTED = 1.3e-3
@@ -191,16 +189,10 @@ def run(out_dir, *, samples: int | None = None, workers: int = 1) -> dict:
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     out = Path(argv[0] if argv else "reports/uncertainty_deorbit")
-    result = run(out)
-    md = ["# Electrodynamic de-orbit under uncertainty", "",
-          "256 de-orbits of the paper-section-5 model from 400 km (studies/uncertainty/deorbit_verify.toml; "
-          "tetherlab/uncertainty/verification_deorbit.py has the budget of every gate).", ""]
-    for title, rows in result["tables"]:
-        md += [f"**{title}**", "", _md_table(rows), ""]
-    md += [f"![{Path(p).stem}]({Path(p).resolve().relative_to(out.resolve()).as_posix()})" for p in result["figures"]]
-    (out / "uncertainty_deorbit.md").write_text("\n".join(md) + "\n")
-    (out / "uncertainty_deorbit_gates.json").write_text(json.dumps(result["gates"], indent=1))
-    print(json.dumps(result["gates"], indent=1))
+    write_section(out, "uncertainty_deorbit", "Electrodynamic de-orbit under uncertainty",
+                  "256 de-orbits of the paper-section-5 model from 400 km (studies/uncertainty/deorbit_verify.toml; "
+                  "tetherlab/uncertainty/verification_deorbit.py has the budget of every gate).",
+                  run(out))  # fmt: skip
     return 0
 
 
