@@ -80,6 +80,29 @@ def test_the_rigid_defects_are_credited_only_through_their_control_gate():
         assert got == expect, ctrl
 
 
+def test_the_reel_defects_are_credited_only_through_their_control_gates():
+    # verify.mutation_summary: each passing deployment control gate credits its defect to the gates
+    # it failed in studies/deployment.py; a failing or missing one credits nothing
+    pairs = (("deployment_rescaled_negative_control", "reel_rescaled", "deployment_momentum_over_bound"),
+             ("deployment_no_ldot_negative_control", "reel_strain_rate_without_ldot",
+              "deployment_exponential_tension_over_budget"),
+             ("deployment_frozen_negative_control", "reel_law_frozen", "deployment_retrieval_invariant"))
+    for ctrl_gate, defect, gate in pairs:
+        assert ParamView(_reel_params(defect)).defect == getattr(L, "DEFECT_" + {
+            "reel_rescaled": "REEL_RESCALED", "reel_strain_rate_without_ldot": "REEL_NO_LDOT",
+            "reel_law_frozen": "REEL_FROZEN"}[defect])
+        thr = GATES[ctrl_gate]["threshold"]
+        for ctrl, expect in ((0.5 * thr, True), (2.0 * thr, False), (None, False)):
+            by_defect, _by_gate, _ = verify.mutation_summary({}, GATES, {ctrl_gate: ctrl})
+            assert (gate in by_defect[defect]) == expect, (ctrl_gate, ctrl)
+
+
+def _reel_params(name):
+    p = prepare(load_scene(ROOT / "studies" / "scenes" / "lateral-two-rods.toml")).model.fresh_params()
+    mutants.MUTANTS[name].mutate(p)
+    return p
+
+
 def _gate(values, gid):
     return values[gid], GATES[gid]["threshold"]
 

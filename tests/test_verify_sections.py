@@ -112,3 +112,40 @@ def test_outside_a_checkout_verify_says_what_is_missing(tmp_path, monkeypatch):
         checkout.load_study("catenary")
     with pytest.raises(SystemExit):
         verify.main(["--out", str(tmp_path / "r")])  # argparse's error: usage and the message, status 2
+
+
+def test_deployment_section_measures_every_deployment_gate(tmp_path):
+    """The deployment study (studies/deployment.py, a few seconds once the kernels are compiled)
+    through verify's own study runner: every deployment gate of references/gates.toml is measured
+    and passes, its controls among them, and the section has its figures."""
+    import tomllib
+
+    gates = tomllib.loads((verify.ROOT / "references" / "gates.toml").read_text())
+    sections, values, failures = verify.run_studies(tmp_path, ["deployment"])
+    assert failures == [] and [s[0] for s in sections] == ["deployment"]
+    wanted = {g for g in gates if g.startswith("deployment_")}
+    assert len(wanted) == 11 and wanted <= set(values)
+    for g in wanted:
+        assert values[g] is not None and values[g] <= gates[g]["threshold"], (g, values[g])
+        assert verify.gate_section(g) == "study-deployment"
+    md = sections[0][2]
+    for fig in ("deployment_length_rods", "deployment_momentum", "deployment_exponential_angle",
+                "deployment_retrieval_invariant"):
+        assert f"(deployment/{fig}.png)" in md and (tmp_path / "deployment" / f"{fig}.png").is_file()
+
+
+def test_deployment_part_that_fails_leaves_its_gates_unmeasured(tmp_path, monkeypatch):
+    mod = verify.load_study("deployment")
+
+    def broken():
+        raise RuntimeError("deliberate failure")
+
+    monkeypatch.setattr(mod, "part_exponential", broken)
+    mod.main([str(tmp_path), "--quiet", "--parts", "ABE"])
+    from tetherlab.verify.studies import _deployment_gates
+
+    values = _deployment_gates(tmp_path)
+    assert values["deployment_exponential_angle_over_budget"] is None  # "not measured": verify fails it
+    assert values["deployment_no_ldot_negative_control"] is None
+    assert values["deployment_momentum_over_bound"] is not None  # the other parts still ran
+    assert "E FAILED: RuntimeError: deliberate failure" in (tmp_path / "deployment.md").read_text()

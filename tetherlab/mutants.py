@@ -21,7 +21,9 @@ How a defect is switched on, and why it can never reach a user's run:
 
 The rigid-body defects (attachment vector not rotated, omega x (omega x r) dropped)
 are run by studies/rigid_bodies.py itself (no cheap probe exercises a rigid body); verify credits
-them from that study's control gate, as it credits eq. 20 from the hard cases' control.
+them from that study's control gate, as it credits eq. 20 from the hard cases' control.  The reel's
+defects (fixed-segment scaling, strain rate without l', law ignored) are run likewise by
+studies/deployment.py and credited from its control gates.
 
 Use (verification only)::
 
@@ -293,6 +295,37 @@ MUTANTS = {
             ("hub_spoke_radius_tip_over_bound", "hub_spoke_radius_defects_negative_control"),
             mutate=_flag(L.MUT_NO_CENTRIPETAL),
             path="rigid",
+        ),
+        # -- the reel's defects: the kernel's DEFECT_REEL_* codes in the same header slot.  No
+        # cheap probe pays tether out of a reel; studies/deployment.py runs each beside the run it
+        # must spoil and verify credits it from that study's control gate.
+        Mutant(
+            "reel_rescaled",
+            "a reel's tether paid out as the peers do: n fixed rods of L(t)/n, mass appearing in place "
+            "(no flux through the exit)",
+            "tether/reel.py (p[H_MUTANT] = DEFECT_REEL_RESCALED)",
+            "docs/deployment.md 1 and 4 (Reynolds' transport theorem at the exit)",
+            ("deployment_momentum_over_bound", "deployment_energy_over_bound", "deployment_rescaled_negative_control"),
+            mutate=_flag(L.DEFECT_REEL_RESCALED),
+            path="reel",
+        ),
+        Mutant(
+            "reel_strain_rate_without_ldot",
+            "the strain rate of the rod at the reel without its l' term (the damping brakes a steady deployment)",
+            "tether/reel.py (p[H_MUTANT] = DEFECT_REEL_NO_LDOT)",
+            "docs/deployment.md 3.3, eq. (3.7)",
+            ("deployment_exponential_tension_over_budget", "deployment_no_ldot_negative_control"),
+            mutate=_flag(L.DEFECT_REEL_NO_LDOT),
+            path="reel",
+        ),
+        Mutant(
+            "reel_law_frozen",
+            "the kernel ignores the reel's law: the rod at the reel keeps its length",
+            "tether/reel.py (p[H_MUTANT] = DEFECT_REEL_FROZEN)",
+            "docs/deployment.md 7c (the libration's action, an adiabatic invariant)",
+            ("deployment_retrieval_invariant", "deployment_frozen_negative_control"),
+            mutate=_flag(L.DEFECT_REEL_FROZEN),
+            path="reel",
         ),
     )
 }

@@ -112,6 +112,8 @@ TOOTHLESS = {
     "uq_deorbit_failed": "not probed: a count of failed runs (a defect that makes runs fail is caught by the runs' "
     "own error reports, listed in failures.csv)",
     "uq_deorbit_negative_controls": "the count of the de-orbit study's controls that missed itself",
+    "deployment_birth_remap": "the remap of a birth is Python (deployment.birth_state), which no defect of the "
+    "kernel reaches; it is exact by construction (docs/deployment.md 6.1) and measured without integration",
     "mutation_uncaught_defects": "the mutation score itself",
     "mutation_toothless_unexplained": "the count of gates without teeth or reason itself",
 }
@@ -208,6 +210,22 @@ def mutation_summary(cells, gates: dict, study_values: dict):
             by_defect.setdefault(d, []).append("hub_spoke_radius_tip_over_bound")
             by_gate.setdefault("hub_spoke_radius_tip_over_bound", []).append(d)
             by_gate.setdefault("hub_spoke_radius_defects_negative_control", []).append(d)
+    # the deployment study runs the reel kernel's three defects itself (studies/deployment.py): each
+    # control gate passes only if its defect failed every gate listed here
+    for ctrl_gate, defect, caught_by in (
+        ("deployment_rescaled_negative_control", "reel_rescaled",
+         ("deployment_momentum_over_bound", "deployment_angular_momentum_over_bound", "deployment_energy_over_bound",
+          "deployment_retirement_momentum_over_bound")),
+        ("deployment_no_ldot_negative_control", "reel_strain_rate_without_ldot",
+         ("deployment_exponential_angle_over_budget", "deployment_exponential_tension_over_budget")),
+        ("deployment_frozen_negative_control", "reel_law_frozen", ("deployment_retrieval_invariant",)),
+    ):  # fmt: skip
+        ctrl = study_values.get(ctrl_gate)
+        if ctrl is not None and ctrl <= gates[ctrl_gate]["threshold"]:
+            for g in caught_by:
+                by_defect.setdefault(defect, []).append(g)
+                by_gate.setdefault(g, []).append(defect)
+            by_gate.setdefault(ctrl_gate, []).append(defect)
     uncaught = [d for d, gs in by_defect.items() if not gs]
     unexplained = [g for g, ds in by_gate.items() if not ds and g not in TOOTHLESS]
     return by_defect, by_gate, {"mutation_uncaught_defects": float(len(uncaught)),

@@ -44,7 +44,9 @@ def gate_section(gid: str) -> str:
                         # the rigid-body oracles (studies/rigid_bodies.py, docs/rigid-oracles.md)
                         ("hub_spoke", "study-rigid_bodies"), ("torque_free", "study-rigid_bodies"),
                         ("gg_libration", "study-rigid_bodies"), ("wheel", "study-rigid_bodies"),
-                        ("untethered_bodies", "study-rigid_bodies"), ("conservation_tree", "study-rigid_bodies")):
+                        ("untethered_bodies", "study-rigid_bodies"), ("conservation_tree", "study-rigid_bodies"),
+                        # the reel (studies/deployment.py, docs/deployment.md 8)
+                        ("deployment_", "study-deployment")):
         if gid.startswith(prefix):
             return sid
     return "gates"

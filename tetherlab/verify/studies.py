@@ -156,6 +156,25 @@ def _uncertainty_deorbit_gates(outdir: Path) -> dict:
     }
 
 
+def _deployment_gates(outdir: Path) -> dict:
+    """Gates of studies/deployment.py (budgets in docs/deployment.md 8); a part that did not run
+    leaves its gates None: "not measured"."""
+    g = json.loads((outdir / "deployment_summary.json").read_text())["gates"]
+    return {
+        "deployment_momentum_over_bound": g.get("deployment_momentum_over_bound"),
+        "deployment_angular_momentum_over_bound": g.get("deployment_angular_momentum_over_bound"),
+        "deployment_energy_over_bound": g.get("deployment_energy_over_bound"),
+        "deployment_birth_remap": g.get("deployment_birth_remap"),
+        "deployment_retirement_momentum_over_bound": g.get("deployment_retirement_momentum_over_bound"),
+        "deployment_exponential_angle_over_budget": g.get("deployment_exponential_angle_over_budget"),
+        "deployment_exponential_tension_over_budget": g.get("deployment_exponential_tension_over_budget"),
+        "deployment_retrieval_invariant": g.get("deployment_retrieval_invariant"),
+        "deployment_rescaled_negative_control": g.get("deployment_rescaled_negative_control"),
+        "deployment_no_ldot_negative_control": g.get("deployment_no_ldot_negative_control"),
+        "deployment_frozen_negative_control": g.get("deployment_frozen_negative_control"),
+    }
+
+
 #: studies that live in the package rather than in the checkout's studies/ (name -> module with main)
 PACKAGE_STUDIES = {
     "uncertainty": "tetherlab.uncertainty.verification",
@@ -190,6 +209,8 @@ STUDIES = [
      _uncertainty_gates),
     ("Electrodynamic de-orbit under uncertainty: 256 samples against the closed form (docs/uncertainty.md 7)",
      "uncertainty_deorbit", [], "uncertainty_deorbit.md", _uncertainty_deorbit_gates),
+    ("Deployment and retrieval from a reel: balances across births, exponential deployment, slow retrieval "
+     "(docs/deployment.md 8)", "deployment", ["--quiet"], "deployment.md", _deployment_gates),
 ]
 
 
