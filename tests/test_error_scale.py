@@ -61,7 +61,11 @@ def test_error_scale_rejects_anything_but_rod_or_tether(value, got):
 def test_error_scale_defaults_to_rod_and_round_trips():
     sc = tetherlab.load_scene(SCENES / "hanging-chain-placed.toml")
     assert sc.integrator.error_scale == "rod"
-    assert sc.replace(**{"integrator.error_scale": "tether"}).integrator.error_scale == "tether"
+    teth = sc.replace(**{"integrator.error_scale": "tether"})
+    assert teth.integrator.error_scale == "tether"
+    assert teth.to_dict()["integrator"]["error_scale"] == "tether"
+    assert "error_scale" not in sc.to_dict()["integrator"]  # the default is not written
+    assert type(teth).from_dict(teth.to_dict()) == teth
 
 
 # --- the tolerance vector --------------------------------------------------------------------
@@ -110,6 +114,18 @@ def test_tether_scale_takes_several_times_fewer_steps_on_the_ringing_start():
     # the sideways position, the lateral mode's answer, within the frequency budget's phase
     bound_m = AMPLITUDE_M * FREQ_BUDGET * OMEGA_1 * t_s
     assert np.max(np.abs(x["tether"] - x["rod"])) <= bound_m
+
+
+def test_negative_control_a_loose_tolerance_breaks_the_sideways_bound():
+    # the bound above must be able to fail: rtol = atol = 1e-4 on the tether scale (ten thousand
+    # times looser) moves the sideways position beyond it (measured: 15 times the bound)
+    t_s = 3.5
+    loose = _chain(32, "tether", f"{t_s} s").replace(**{"integrator.rtol": 1e-4, "integrator.atol": 1e-4})
+    ref = tetherlab.simulate(_chain(32, "tether", f"{t_s} s"), progress=False)
+    bad = tetherlab.simulate(loose, progress=False)
+    bound_m = AMPLITUDE_M * FREQ_BUDGET * OMEGA_1 * t_s
+    diff = np.max(np.abs(bad.timeseries["tip.x_m"].to_numpy() - ref.timeseries["tip.x_m"].to_numpy()))
+    assert diff > bound_m
 
 
 @pytest.mark.slow
