@@ -14,7 +14,9 @@ count, so that the difference is integration error only:
   orbits; the libration frequency fitted to ``main.theta_rad`` (about sqrt(3) omega); the end
   mass's final position against the reference.
 - deorbit: studies/scenes/deorbit-ed-rods.toml, a ``--deorbit`` stretch from its quasi-static
-  start; the end mass's final position against the reference.
+  start (or ``--deorbit-motion equilibrium``: the current then acts as a step load on the
+  conservative equilibrium and rings the axial modes, docs/integrators.md section 10); the end
+  mass's final position against the reference.
 
 Per run: RADAU5 steps, rejections, integration wall time; per case and choice: the exponent of
 the wall time and of the steps in the rod count (least squares on log-log).
@@ -50,7 +52,8 @@ def _case(name: str, args) -> tuple[object, str, float | None]:
         return sc, "main.theta_rad", math.sqrt(3.0) * omega
     if name == "deorbit":
         sc = tetherlab.load_scene(SCENES / "deorbit-ed-rods.toml")
-        sc = sc.replace(**{"duration": args.deorbit, "output.count": 11, "output.step": None})
+        sc = sc.replace(**{"duration": args.deorbit, "output.count": 11, "output.step": None,
+                           "orbit.motion": args.deorbit_motion})  # fmt: skip
         return sc, None, None
     raise SystemExit(f"unknown case {name!r}")
 
@@ -95,6 +98,9 @@ def main(argv=None) -> None:
     ap.add_argument("--ref-scale", default="tether", help="error_scale of the reference run")
     ap.add_argument("--orbits", type=float, default=1.0)
     ap.add_argument("--deorbit", default="0.02 d")
+    ap.add_argument("--deorbit-motion", default="quasi-static",
+                    help='orbit.motion of the de-orbit: "quasi-static" (the scene\'s) or "equilibrium" '
+                         "(the conservative equilibrium: the current is a step load that rings the axial modes)")
     args = ap.parse_args(argv)
     rods = [int(x) for x in args.rods.split(",")]
     for case in args.cases.split(","):
