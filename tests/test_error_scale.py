@@ -139,3 +139,18 @@ def test_tether_scale_keeps_the_lateral_frequency_within_budget_over_35_s():
     assert abs(w["tether"] - w["rod"]) / w["rod"] <= FREQ_BUDGET
     # and both are the rods' model (9e-6 off Bessel at n = 32), not something else
     assert abs(w["tether"] - OMEGA_1) / OMEGA_1 <= 2e-5
+
+
+def test_each_tether_gets_its_own_length():
+    # studies/scenes/chain3.toml: t1 of 2 km in 4 rods, then t2 of 1 km in 4 rods (scene file)
+    sc = tetherlab.load_scene(SCENES / "chain3.toml").replace(**{"integrator.error_scale": "tether"})
+    prep = prepare(sc)
+    lay = prep.model.state
+    floor = tether_error_floor(prep.model, 1.0)
+    for g, whole_m in [(0, 2000.0), (3, 2000.0), (4, 1000.0), (7, 1000.0)]:
+        assert np.allclose(floor[lay.rod(g)], whole_m / (2 * SQ3), rtol=1e-9, atol=0)
+    # the run's atol: the scene's rtol times the floor on top of the rod scale (orbit time unit)
+    base = prepare(sc.replace(**{"integrator.error_scale": "rod"}))
+    t_unit = base.atol[lay.rod(0)][0] / base.atol[lay.qd][3]  # d_1's scale over its rate's: T_u
+    expected = base.atol + sc.integrator.rtol * tether_error_floor(prep.model, t_unit)
+    assert np.allclose(prep.atol, expected, rtol=1e-12, atol=0)
