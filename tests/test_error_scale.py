@@ -154,3 +154,19 @@ def test_each_tether_gets_its_own_length():
     t_unit = base.atol[lay.rod(0)][0] / base.atol[lay.qd][3]  # d_1's scale over its rate's: T_u
     expected = base.atol + sc.integrator.rtol * tether_error_floor(prep.model, t_unit)
     assert np.allclose(prep.atol, expected, rtol=1e-12, atol=0)
+
+
+def test_validate_names_the_tether_scale_and_not_the_default(tmp_path, capsys):
+    from tetherlab.cli import main
+
+    text = (SCENES / "hanging-chain-placed.toml").read_text()
+    assert main(["validate", str(SCENES / "hanging-chain-placed.toml")]) == 0
+    assert "error scale" not in capsys.readouterr().out
+    path = tmp_path / "tether.toml"
+    path.write_text(text.replace('method = "radau5"', 'method = "radau5"\nerror_scale = "tether"'))
+    assert main(["validate", str(path)]) == 0
+    assert "error scale tether" in capsys.readouterr().out
+    path.write_text(text.replace('method = "radau5"', 'method = "radau5"\nerror_scale = "rods"'))
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "integrator.error_scale" in err and "'rods'" in err
