@@ -545,6 +545,9 @@ def test_report_tables_leave_out_nan_columns_and_say_so():
     assert "paper" not in md.splitlines()[0] and "| nan" not in md
     assert "left out, no value in any row: paper" in md
     assert _unit("1") == "ratio (no unit)" and _unit("m") == "m"
+    # a column with a value in some rows keeps them; the rows without one read a dash
+    md = table([{"case": "cowell", "ratio": float("nan")}, {"case": "dromo", "ratio": 0.5}])
+    assert "| cowell | – |" in md and "| dromo | 0.5 |" in md and "nan" not in md
 
 
 def test_the_fidelity_figure_shows_each_level_against_the_first(tmp_path, monkeypatch):

@@ -226,7 +226,8 @@ def _validate(args) -> int:
         f"  {len(scene.bodies)} bodies, {len(scene.tethers)} tethers, {rods} rods; effects: "
         + (", ".join(e.name for e in scene.effects) or "none (free space)"),
         f"  duration {duration}; integrator {scene.integrator.method}, rtol {scene.integrator.rtol:g}, "
-        f"formulation {scene.integrator.formulation}",
+        f"formulation {scene.integrator.formulation}"
+        + (f", error scale {scene.integrator.error_scale}" if scene.integrator.error_scale != "rod" else ""),
     ]
     if need is not None:
         mem = need.rows * need.row_bytes_memory + need.fixed_bytes

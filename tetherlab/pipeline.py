@@ -31,6 +31,7 @@ from .system import (
     TetherSpec,
     WheelSpec,
     build_model,
+    tether_error_floor,
     tolerance_scales,
 )
 
@@ -229,6 +230,10 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
     t_unit = math.sqrt(rr**3 / mu) if orbital else 1.0
     ref_len = rr if orbital else max(rr, max((t.length_m for t in tethers), default=1.0))
     atol = scene.integrator.atol * tolerance_scales(model, ref_len, t_unit)
+    if scene.integrator.error_scale == "tether":
+        # err_i/(atol_i + rtol |y_i|) with |d_i| ~ L_rod/(2 sqrt 3): this floor makes the rods'
+        # test rtol relative to the tether's length instead (docs/integrators.md section 15)
+        atol = atol + scene.integrator.rtol * tether_error_floor(model, t_unit)
 
     duration = scene.duration_s
     if duration is None:  # given in orbits

@@ -112,7 +112,7 @@ def _not_conserved(res) -> tuple[list[str], list[str]]:
             if t.get("damping") not in (None, 0, "0 N s", "0.0 N s"):
                 energy.append(f"damping of {name}")
             if t.get("model", "paper") == "paper":
-                energy.append(f"the paper model of {name} (its joints work when rods stretch: docs/model.md)")
+                energy.append(f"the paper model of {name}, whose joints work when rods stretch (docs/model.md)")
     for name, b in (scene.get("bodies") or {}).items():
         if isinstance(b, dict) and (b.get("wheels") or b.get("control")):
             energy.append(f"the wheel motors of {name}")

@@ -98,7 +98,8 @@ def _empty(v) -> bool:
 
 def table(rows) -> str:
     """A Markdown table of ``rows`` (dicts); columns empty or NaN in every row are left out and
-    named under the table, so a reader never meets a column of nan."""
+    named under the table, and a single cell without a value reads "–", so a reader never meets
+    a nan."""
     if not rows:
         return ""
     keys = []
@@ -110,7 +111,8 @@ def table(rows) -> str:
         return f"(no values: every column is empty: {', '.join(map(str, dropped))})"
     lines = ["| " + " | ".join(_cell(k) for k in keys) + " |", "|" + "---|" * len(keys)]
     for r in rows:
-        lines.append("| " + " | ".join(_cell(_fmt(r.get(k, ""))) for k in keys) + " |")
+        # a cell without a value (NaN, None, empty: not applicable to that row) reads as a dash
+        lines.append("| " + " | ".join("–" if _empty(r.get(k)) else _cell(_fmt(r.get(k))) for k in keys) + " |")
     if dropped:
         lines += ["", f"*(left out, no value in any row: {', '.join(_cell(k) for k in dropped)})*"]
     return "\n".join(lines)

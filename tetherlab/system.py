@@ -604,3 +604,27 @@ def tolerance_scales(model: Model, ref_length_m: float, ref_time_s: float) -> np
             wheels.append(w.inertia_kg_m2 * max(1.0 / ref_time_s, abs(w.speed_rad_s), w.max_speed_rad_s))
     s[lay.first_order] = np.array(att + wheels, float)
     return s
+
+
+def tether_error_floor(model: Model, ref_time_s: float) -> np.ndarray:
+    """Per-component floor that measures the rods' error against their whole tether's length.
+
+    d_i: L_tether/(2 sqrt 3), the half TMED separation of the tether as one rod; d_i': that over
+    the time unit; every other component: 0.  The pipeline adds rtol times this to the absolute
+    tolerance (integrator.error_scale = "tether"), so the relative part of a rod's error test no
+    longer shrinks with the rod (docs/integrators.md section 15).
+    """
+    lay = model.state
+    lengths = model.rod_lengths()
+    s = np.zeros(lay.size)
+    q = np.zeros(lay.size)
+    g = 0
+    for t in model.tethers:
+        span = slice(g, g + t.rods)
+        whole = float(np.sum(lengths[span])) / (2 * SQ3)
+        for r in range(g, g + t.rods):
+            q[lay.rod(r)] = whole
+        g += t.rods
+    s[lay.q] = q[lay.q]
+    s[lay.qd] = q[lay.q] / ref_time_s
+    return s

@@ -296,10 +296,15 @@ class IntegratorSpec:
     # the linear time element (docs/dromo.md section 11: elliptic orbits, fewer steps where the
     # perturbation is small at apocentre)
     time_element: str = "none"
+    # What the rods' error is measured against (docs/integrators.md section 15): "rod", each rod's
+    # own length (resolves the axial ringing of short rods); "tether", the whole tether's length
+    # (the error a user sees in a point's position along the tether)
+    error_scale: str = "rod"
 
 
 FORMULATIONS = ("cowell", "dromo", "dromo-time", "cowell-orbit")
 TIME_ELEMENTS = ("none", "linear")
+ERROR_SCALES = ("rod", "tether")
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ from ..forces import EFFECTS
 from ..units import GRAVITATIONAL_PARAMETER, LENGTH, TIME, is_number, kind_for_unit, shown, to_si
 from .data import (
     CENTRAL_BODY_PRESETS,
+    ERROR_SCALES,
     FORMULATIONS,
     INTEGRATOR_METHODS,
     TIME_ELEMENTS,
@@ -192,7 +193,8 @@ def _parse_stop(value: Any, central: CentralBody) -> Stop:
 
 def _parse_integrator(value: Any) -> IntegratorSpec:
     path = "integrator"
-    table = _table(value, path, ("method", "rtol", "atol", "max_step", "max_steps", "formulation", "time_element"))
+    table = _table(value, path, ("method", "rtol", "atol", "max_step", "max_steps", "formulation", "time_element",
+                                   "error_scale"))
     method = _choice(table.get("method", "dop853"), f"{path}.method", INTEGRATOR_METHODS)
     rtol = _number(table.get("rtol", 1e-10), f"{path}.rtol", "a relative tolerance in (0, 1)")
     if not 0.0 < rtol < 1.0:
@@ -204,7 +206,8 @@ def _parse_integrator(value: Any) -> IntegratorSpec:
     max_steps = _integer(table["max_steps"], f"{path}.max_steps", 1) if "max_steps" in table else None
     formulation = _choice(table.get("formulation", "cowell"), f"{path}.formulation", FORMULATIONS)
     time_element = _choice(table.get("time_element", "none"), f"{path}.time_element", TIME_ELEMENTS)
-    return IntegratorSpec(method, rtol, atol, max_step, max_steps, formulation, time_element)
+    error_scale = _choice(table.get("error_scale", "rod"), f"{path}.error_scale", ERROR_SCALES)
+    return IntegratorSpec(method, rtol, atol, max_step, max_steps, formulation, time_element, error_scale)
 
 
 def _parse_output(value: Any, duration_s: float) -> OutputSpec:

@@ -218,6 +218,8 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
         integrator["formulation"] = ig.formulation
     if ig.time_element != "none":
         integrator["time_element"] = ig.time_element
+    if ig.error_scale != "rod":
+        integrator["error_scale"] = ig.error_scale
     out["integrator"] = integrator
     if scene.stop is not None and scene.stop.altitude_m is not None:
         out["stop"] = {"altitude": format_si(scene.stop.altitude_m, LENGTH)}
