@@ -17,7 +17,6 @@ Each gate has its threshold from the error budget of docs/deployment.md 8 and a 
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest
@@ -275,119 +274,53 @@ def test_reel_at_the_end_that_is_not_the_attachment():
     assert err.value.key == "tethers.main.reel"
 
 
-# -- exponential deployment (docs/deployment.md 7) -----------------------------------------------------
-A_M = 42164e3  # orbit radius: l/a <= 3e-4, so the field's terms beyond the gravity gradient stay small
-M_ST, M_SUB, RHO, EA = 1e4, 100.0, 1e-5, 1e3  # kg, kg, kg/m, N
-C = 0.2
+# -- exponential deployment and slow retrieval (docs/deployment.md 7): the scenes and the error
+# measures are the verify study's own (studies/deployment.py), so the tests and the report check
+# the same runs ------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def study():
+    from .helpers import forget_study, import_study
 
-
-def _exponential_scene():
-    om = math.sqrt(MU / A_M**3)
-    theta = 0.5 * math.asin(-4.0 * C / 3.0)
-    m_red = M_ST * M_SUB / (M_ST + M_SUB)
-    strain = m_red * om**2 * 2000.0 * (3 * math.cos(theta) ** 2 - C**2) / EA  # the steady strain at 2 km
-    return Scene.from_dict({
-        "name": "exponential-deployment", "duration": "1.5 orbits", "effects": {"central_gravity": {}},
-        "bodies": {"m0": {"mass": f"{M_ST} kg"}, "mf": {"mass": f"{M_SUB} kg"}},
-        "orbit": {"reference": "center_of_mass", "motion": "corotating", "elements": {
-            "a": f"{A_M / 1e3} km", "e": 0.0, "i": "0 deg", "raan": "0 deg", "argp": "0 deg", "nu": "0 deg"}},
-        "tethers": {"main": {
-            "from": "m0", "to": "mf", "length": "2 km", "EA": f"{EA} N", "linear_density": f"{RHO} kg/m",
-            "damping": "3e4 N s", "model": "energy",
-            "initial": {"shape": "straight", "theta": f"{math.degrees(theta)} deg", "strain": strain},
-            "reel": {"law": "exponential", "rate": f"{C * om} 1/s", "rod_length": "2 km", "stored_length": "30 km"}}},
-        "integrator": {"method": "radau5", "rtol": 1e-9, "atol": 1e-9},
-        "output": {"count": 301},
-    }), om, theta, m_red  # fmt: skip
-
-
-def _angle_and_tension_errors(run, om, theta, m_red):
-    import pandas as pd
-
-    dg = pd.concat([ph.diagnostics[["main.theta_rad"]] for ph in run.phases], ignore_index=True)
-    r = run.reel
-    L = r["deployed_length_m"].to_numpy()
-    th = dg["main.theta_rad"].to_numpy()
-    T = r["exit_tension_N"].to_numpy()
-    T_ref = m_red * om**2 * L * (3 * math.cos(theta) ** 2 - C**2)  # Modi & Misra 1979 (docs/deployment.md 7)
-    keep = r["t_s"].to_numpy() > 0.25 * r["t_s"].iloc[-1]  # after the start's axial transient
-    # budget (docs/deployment.md 7): 4 (l/a) + rho l/(6 m*) + eps, relative to theta
-    eps = T / EA
-    budget_th = (4.0 * L / A_M + RHO * L / (6 * m_red) + eps) * abs(theta)
-    budget_T = RHO * L / (6 * m_red) + eps + 2 * abs(math.tan(theta)) * budget_th + 4.0 * L / A_M
-    return (np.abs(th - theta) / budget_th)[keep], (np.abs(T / T_ref - 1) / budget_T)[keep], len(run.changes)
+    mod = import_study("deployment")
+    yield mod
+    forget_study("deployment")
 
 
 @pytest.mark.slow
-def test_exponential_deployment_angle_and_tension():
-    scene, om, theta, m_red = _exponential_scene()
-    th_ratio, t_ratio, births = _angle_and_tension_errors(simulate_reel(scene), om, theta, m_red)
-    assert births == 6  # 2 km -> 12.4 km in rods of 2 km
-    assert th_ratio.max() <= 1.0, th_ratio.max()
-    assert t_ratio.max() <= 1.0, t_ratio.max()
+def test_exponential_deployment_angle_and_tension(study):
+    scene, om, theta, m_red = study.exponential_scene()
+    run = simulate_reel(scene)
+    th_ratio, t_ratio, _curves = study.exponential_errors(run, om, theta, m_red)
+    assert len(run.changes) == 6  # 2 km -> 12.4 km in rods of 2 km
+    assert th_ratio <= 1.0, th_ratio
+    assert t_ratio <= 1.0, t_ratio
 
 
 @pytest.mark.slow
-def test_strain_rate_without_its_ldot_term_fails_the_deployment_gate():
-    scene, om, theta, m_red = _exponential_scene()
+def test_strain_rate_without_its_ldot_term_fails_the_deployment_gate(study):
+    scene, om, theta, m_red = study.exponential_scene()
     run = simulate_reel(scene, defect=DEFECT_REEL_NO_LDOT, raise_on_failure=False)
     if run.ok:  # the damping brakes the line with D c Omega ~ 0.4 N against a tension of 3 to 19 mN
-        th_ratio, t_ratio, _ = _angle_and_tension_errors(run, om, theta, m_red)
-        assert t_ratio.max() > 10.0
-
-
-# -- slow retrieval: the libration amplitude as an adiabatic invariant (docs/deployment.md 7c) --------
-A_RETR = 7000e3
-C_RETR = -0.02  # l'/(l Omega): exponential retrieval, 10 km -> 5.3 km in 5 orbits
-A0_RETR = math.radians(5.0)
-
-
-def _retrieval_run(defect=0):
-    om = math.sqrt(MU / A_RETR**3)
-    th_s = 0.5 * math.asin(-4.0 * C_RETR / 3.0)  # the steady angle the oscillation is about (section 7)
-    m_red = M_ST * M_SUB / (M_ST + M_SUB)
-    scene = Scene.from_dict({
-        "name": "retrieval", "duration": "5 orbits", "effects": {"central_gravity": {}},
-        "bodies": {"m0": {"mass": f"{M_ST} kg"}, "mf": {"mass": f"{M_SUB} kg"}},
-        "orbit": {"reference": "center_of_mass", "motion": "corotating", "elements": {
-            "a": f"{A_RETR / 1e3} km", "e": 0.0, "i": "0 deg", "raan": "0 deg", "argp": "0 deg", "nu": "0 deg"}},
-        "tethers": {"main": {
-            "from": "m0", "to": "mf", "length": "10 km", "EA": "1e4 N", "linear_density": f"{RHO} kg/m",
-            "damping": "3e4 N s", "model": "energy",
-            "initial": {"shape": "straight", "theta": f"{math.degrees(th_s + A0_RETR)} deg",
-                        "strain": m_red * om**2 * 1e4 * 3.0 / 1e4},
-            "reel": {"law": "exponential", "rate": f"{C_RETR * om} 1/s", "rod_length": "2 km",
-                     "stored_length": "1 km"}}},
-        "integrator": {"method": "radau5", "rtol": 1e-9, "atol": 1e-9},
-        "output": {"count": 2001},
-    })  # fmt: skip
-    import pandas as pd
-
-    run = simulate_reel(scene, defect=defect)
-    dg = pd.concat([ph.diagnostics[["t_s", "main.theta_rad"]] for ph in run.phases], ignore_index=True)
-    keep = ~dg["t_s"].duplicated().to_numpy()  # a phase's first row repeats the last one's
-    x = np.abs(dg["main.theta_rad"].to_numpy()[keep] - th_s)
-    L = run.reel["deployed_length_m"].to_numpy()[keep]
-    peaks = [i for i in range(1, len(x) - 1) if x[i] >= x[i - 1] and x[i] > x[i + 1]]
-    return np.array([x[i] * L[i] / (A0_RETR * 1e4) for i in peaks]), L[peaks], run
+        _th_ratio, t_ratio, _curves = study.exponential_errors(run, om, theta, m_red)
+        assert t_ratio > 10.0
 
 
 @pytest.mark.slow
-def test_slow_retrieval_amplitude_grows_as_one_over_length():
+def test_slow_retrieval_amplitude_grows_as_one_over_length(study):
     """Retrieval at l'/l = -0.02 Omega: the libration's action ~ m* l^2 A^2 sqrt3 Omega is an
-    adiabatic invariant, so A l stays A0 l0 (issue oracle 2).  Budget: the adiabatic parameter
-    |c|/sqrt3 = 0.012 (the invariant's oscillating error is of that order), the amplitude's
-    nonlinearity A^2/8 = 0.003 at 9 deg, the field beyond the gravity gradient 4 l/a = 0.006
-    (section 7): 0.021."""
-    ratio, L, run = _retrieval_run()
+    adiabatic invariant, so A l stays A0 l0.  Budget: the adiabatic parameter |c|/sqrt3 = 0.012
+    (the invariant's oscillating error is of that order), the amplitude's nonlinearity A^2/8 =
+    0.003 at 9 deg, the field beyond the gravity gradient 4 l/a = 0.006 (section 7): 0.021."""
+    ratio, L, run = study.retrieval_run()
+    assert run.ok, run.message
     assert [c["change"] for c in run.changes] == ["retire", "retire"]
     assert len(ratio) >= 15 and L[-1] < 0.6e4  # every half libration from 10 km down to 5.6 km
     assert np.abs(ratio - 1.0).max() <= 0.021, ratio
 
 
 @pytest.mark.slow
-def test_a_reel_whose_law_the_kernel_ignores_fails_the_retrieval_gate():
-    ratio, _, _ = _retrieval_run(defect=DEFECT_REEL_FROZEN)
+def test_a_reel_whose_law_the_kernel_ignores_fails_the_retrieval_gate(study):
+    ratio, _, _ = study.retrieval_run(defect=DEFECT_REEL_FROZEN)
     assert np.abs(ratio - 1.0).max() > 0.1
 
 
