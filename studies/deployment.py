@@ -60,11 +60,11 @@ FREE_RTOL = 1e-11
 
 
 # -- A-D: free space ----------------------------------------------------------------------------
-def free_scene(*, count=241, speed="2 m/s", birth=None, length="150 m", duration="120 s"):
+def free_scene(*, count=241, speed="2 m/s", birth=None, length="150 m", duration="120 s", exit_="canister"):
     """Free space: a 100 kg body pays out a 150 m line (10 g/m, EA 2 kN) to a 10 kg end mass at
     2 m/s, rods of 50 m (births at 75 m); the end mass moves sideways at 0.5 m/s, so the system
     spins (10 kg x 150 m x 0.5 m/s = 750 kg m^2/s about the body)."""
-    reel = {"law": "constant", "speed": speed, "rod_length": "50 m", "stored_length": "2 km", "exit": "canister"}
+    reel = {"law": "constant", "speed": speed, "rod_length": "50 m", "stored_length": "2 km", "exit": exit_}
     if birth is not None:
         reel["birth_length"] = birth
     return Scene.from_dict({

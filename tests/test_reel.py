@@ -27,32 +27,16 @@ from tetherlab.model.params import DEFECT_REEL_FROZEN, DEFECT_REEL_NO_LDOT, DEFE
 from tetherlab.pipeline import prepare
 from tetherlab.scene import Scene
 
+from .helpers import import_study
+
 EPS = np.finfo(float).eps
 MU = 3.986004418e14  # m^3/s^2, the scene preset "earth" (tetherlab/scene/data.py)
 
 
-def _free_scene(*, count=241, speed="2 m/s", birth=None, exit_="canister", length="150 m", duration="120 s"):
-    """Free space: a 100 kg body pays out a 150 m line (10 g/m, EA 2 kN) to a 10 kg end mass at
-    2 m/s, rods of 50 m (births at 75 m); the end mass moves sideways at 0.5 m/s, so the system
-    spins (angular momentum 10 kg x 150 m x 0.5 m/s = 750 kg m^2/s about the body)."""
-    reel = {"law": "constant", "speed": speed, "rod_length": "50 m", "stored_length": "2 km", "exit": exit_}
-    if birth is not None:
-        reel["birth_length"] = birth
-    return Scene.from_dict({
-        "name": "free-deploy", "duration": duration, "effects": {},
-        "bodies": {"m0": {"mass": "100 kg", "position": ["0 m", "0 m", "0 m"], "velocity": ["0 m/s", "0 m/s", "0 m/s"]},
-                   "mf": {"mass": "10 kg", "position": [length, "0 m", "0 m"], "velocity": ["0 m/s", "0.5 m/s", "0 m/s"]}},
-        "tethers": {"main": {"from": "m0", "to": "mf", "length": length, "EA": "2e3 N", "linear_density": "0.01 kg/m",
-                             "model": "energy", "reel": reel}},
-        "integrator": {"method": "dop853", "rtol": 1e-11, "atol": 1e-11},
-        "output": {"count": count},
-    })  # fmt: skip
-
-
-def _vectors(inv, name):
-    return inv[[f"{name}_{a}" for a in ("x_N_s", "y_N_s", "z_N_s")]].to_numpy() if name == "momentum" else inv[
-        [f"angmom_{a}_kg_m2_s" for a in "xyz"]
-    ].to_numpy()
+# the free-space scene and the invariant columns are the verify study's own (studies/deployment.py)
+_STUDY = import_study("deployment")
+_free_scene = _STUDY.free_scene
+_vectors = _STUDY.vectors
 
 
 def _momentum_budget(run) -> float:
@@ -279,11 +263,7 @@ def test_reel_at_the_end_that_is_not_the_attachment():
 # the same runs ------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def study():
-    from .helpers import forget_study, import_study
-
-    mod = import_study("deployment")
-    yield mod
-    forget_study("deployment")
+    return _STUDY
 
 
 @pytest.mark.slow
