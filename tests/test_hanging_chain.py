@@ -40,7 +40,7 @@ SQ3 = math.sqrt(3.0)
 
 def test_continuum_against_closed_forms():
     w = continuum_frequencies(L_M, MASS_KG, TIP_KG, G, count=2)
-    # the value for this case, 8 digits (Bessel solution, docs/hanging-chain.md eq. H5)
+    # 8 digits of the Bessel solution for this case (docs/hanging-chain.md eq. H5)
     assert abs(w[0] - 1.0761050) < 1e-7
     # no tip mass: J0(2 omega sqrt(l / g)) = 0 (Daniel Bernoulli 1732; Rayleigh, Theory of
     # Sound, section 139): omega_k = j_{0,k} / 2 sqrt(g / l)
@@ -59,7 +59,7 @@ def test_rigid_chain_against_compound_pendulum_and_continuum():
     w, _ = chain_modes([L_M], [MASS_KG], TIP_KG, G)
     expected = math.sqrt(G * (MASS_KG / 2 + TIP_KG) * L_M / (MASS_KG * L_M**2 / 3 + TIP_KG * L_M**2))
     assert abs(w[0] - expected) < 1e-14 * expected
-    # n equal bars converge to the continuum with order 2 (the 3.7e-5, 9e-6, 2e-6 at
+    # n equal bars converge to the continuum with order 2 (measured beside MuJoCo's uniform bars: 3.7e-5, 9e-6, 2e-6 at
     # 16, 32, 64 for the first mode)
     wc = continuum_frequencies(L_M, MASS_KG, TIP_KG, G, count=2)
     ns = np.array([8, 16, 32, 64])

@@ -40,7 +40,7 @@ LADDER = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
 REFERENCE_RTOL = 1e-11
 TARGETS = (1e-4, 1e-5)
 HELD_MAX_RODS = 16
-HELD_REFERENCE_RTOL = 1e-10  # 54 s at 16 rods (the measurement); 1e-11 would be minutes
+HELD_REFERENCE_RTOL = 1e-10  # 54 s at 16 rods (measured); 1e-11 would be minutes
 
 
 def _scene(start, n, rtol):
