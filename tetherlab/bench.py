@@ -147,7 +147,7 @@ EXTRA_SECTIONS = (
                       "sigma with the linear time element, ABM) against heyoka: rhs latency, the "
                       "method's step overhead, glue, heyoka per step and per Taylor order; last rows: fitted trends"),
     ("deorbit", "Electrodynamic de-orbit, n = 1, whole mission, every integrator (paper section 5: about 35 d)"),
-    ("uncertainty", "Uncertainty studies: per-sample overhead (replace + prepare) against a de-orbit's integration (target < 5 %), machinery cost against N, de-orbit throughput against workers"),
+    ("uncertainty", "Uncertainty studies: per-sample overhead (the full path, replace + prepare, and the parameter-only re-pack) against a de-orbit's integration (target < 5 %), machinery cost against N, de-orbit throughput against workers"),
     ("deorbit_rods", "Electrodynamic de-orbit against the rod count: RADAU5, formulation cowell-orbit, "
                      "quasi-static start, rtol 1e-8 (targets: n = 16 <= 60 s, n = 64 <= 5 min)"),
     ("cost_vs_n", "Cost per simulated orbit against the rod count, bench-libration rtol 1e-8, "
