@@ -56,6 +56,27 @@ except OSError:  # read-only home: numba falls back to __pycache__ next to the s
 njit = numba.njit
 
 
+def njit_hot(*args, **kwargs):
+    """``njit`` for the kernels of the right-hand side's hot path (the forest driver and the
+    chain's walk, elimination and back substitution), which allocate nothing and only borrow the
+    arrays their caller owns.  Two settings differ from plain ``njit``; neither changes a result:
+
+    * no reference counting (NRT).  With it, every ``inline="always"`` call taking an array inside
+      a loop (a rod's forces, each quadrature node's effects) got an incref/decref pair that numba
+      could not prune across the loop: an out-of-line call per node, with every floating-point
+      register spilled around it.  Without NRT an allocation in such a kernel is a compile error,
+      so "allocates nothing" is checked, not assumed;
+    * IEEE division (``error_model="numpy"``): a zero divisor gives inf or nan, which the kernels'
+      finiteness checks report as a failure, instead of a test and a branch before every
+      division for a ZeroDivisionError the right-hand side cannot raise anyway (its arguments are
+      checked first: a rod's length before its direction, masses at load).
+
+    ``fastmath`` stays off: every operation is the IEEE operation the source writes."""
+    kwargs["_nrt"] = False
+    kwargs.setdefault("error_model", "numpy")
+    return numba.njit(*args, **kwargs)
+
+
 def cache_is_cold() -> bool:
     """True when no kernel of these sources has been compiled into the cache yet (a first run)."""
     try:

@@ -154,6 +154,36 @@ def _other_body(p, code, par, t, body, x, y, z, vx, vy, vz, mass):
 
 
 @njit(cache=True, inline="always")
+def rod_central_gravity_only(p):
+    """The parameter offset of central gravity when it is the only effect the scene names (the
+    common case: the rods' quadrature then runs without the effect dispatch), else -1."""
+    off = int(p[H_OFF_EFF])
+    if int(p[H_NEFF]) == 1 and int(p[off + ET_CODE]) == central_gravity.CODE:
+        return int(p[off + ET_OFF_PAR])
+    return -1
+
+
+@njit(cache=True, inline="always")
+def rod_central_gravity_density(p, mu, t, x, y, z, mass_per_xi):
+    """:func:`rod_force_density` when central gravity (parameter ``mu``) is the only effect, the
+    same operations in the same order, without counting: the caller counts its nodes at once
+    (:func:`count_rod_nodes`)."""
+    ax, ay, az = central_gravity.accel(mu, x, y, z)
+    _note_nonfinite(p, central_gravity.CODE, t, ax, ay, az)
+    return 0.0 + mass_per_xi * ax, 0.0 + mass_per_xi * ay, 0.0 + mass_per_xi * az
+
+
+@njit(cache=True, inline="always")
+def count_rod_nodes(p, nodes):
+    """Count ``nodes`` evaluations of every effect the scene names (what ``nodes`` calls of
+    :func:`rod_force_density` count)."""
+    off = int(p[H_OFF_EFF])
+    cnt = int(p[H_OFF_CNT])
+    for e in range(int(p[H_NEFF])):
+        p[cnt + int(p[off + e * ET_SIZE + ET_CODE])] += nodes
+
+
+@njit(cache=True, inline="always")
 def rod_force_density(p, t, rod, x, y, z, vx, vy, vz, tx, ty, tz, mass_per_xi):
     neff = int(p[H_NEFF])
     off = int(p[H_OFF_EFF])

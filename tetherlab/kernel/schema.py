@@ -207,9 +207,12 @@ WHEEL_SCRATCH = Record("wheel_scratch", "WS_", 4, (
 ))
 
 ROD_SCRATCH = Record("rod_scratch", "SR_", 24, (
-    _f("r1", "SR_R1", 3), _f("r2", "SR_R2", 3), _f("q", "SR_Q", 3), _f("c", "SR_C", 9),
+    _f("r1", "SR_R1", 3), _f("r2", "SR_R2", 3), _f("q", "SR_Q", 3),
+    _f("c", "SR_C", 2, doc="(c1, c2) of C = c1 I + c2 u u^T (eq. 20 corrected)"),
     _f("u", "SR_U", 3), _f("fe", "SR_FE"), _f("eps", "SR_EPS", doc="strain"),
     _f("epsdot_1_s", "SR_EPSD", unit="1/s", doc="strain rate"),
+    _f("m_coeffs_1_kg", "SR_M", 2, unit="1/kg",
+       doc="(al, be) of M = al I + be u u^T = (sqrt3 C - I)/m, kept by the elimination for the back substitution"),
 ))
 
 JOINT_SCRATCH = Record("joint_scratch", "SJ_", 15, (

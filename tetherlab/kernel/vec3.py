@@ -177,3 +177,105 @@ def sub_iuu_sandwich(a, o, s, alpha, beta, u0, u1, u2):
                 + alpha * beta * (sus[i] * us[j] + us[i] * sus[j])
                 + beta * beta * usu * us[i] * us[j]
             )
+
+
+# -- 3x3 blocks held in registers: 9-tuples, row-major ------------------------------------------
+# The elimination of a chain (tether/chain.py) assembles, reduces and inverts one 3x3 block per
+# joint.  Kept in the parameter block, every entry is a store and a reload (the compiler must
+# assume any store to the block may change any other entry); as tuples they stay in registers.
+# Each helper repeats the operation order of its in-block twin above, so results are the same bits.
+
+
+@njit(cache=True, inline="always")
+def iuu9(alpha, beta, ux, uy, uz):
+    """alpha I + beta u u^T, each entry as :func:`add_iuu` adds it."""
+    return (
+        alpha + beta * ux * ux, beta * ux * uy, beta * ux * uz,
+        beta * uy * ux, alpha + beta * uy * uy, beta * uy * uz,
+        beta * uz * ux, beta * uz * uy, alpha + beta * uz * uz,
+    )
+
+
+@njit(cache=True, inline="always")
+def load9(a, o):
+    """The 3x3 block a[o:o+9]."""
+    return (a[o], a[o + 1], a[o + 2], a[o + 3], a[o + 4], a[o + 5], a[o + 6], a[o + 7], a[o + 8])
+
+
+@njit(cache=True, inline="always")
+def store9(a, o, m):
+    """a[o:o+9] = m."""
+    a[o] = m[0]
+    a[o + 1] = m[1]
+    a[o + 2] = m[2]
+    a[o + 3] = m[3]
+    a[o + 4] = m[4]
+    a[o + 5] = m[5]
+    a[o + 6] = m[6]
+    a[o + 7] = m[7]
+    a[o + 8] = m[8]
+
+
+@njit(cache=True, inline="always")
+def add9(a, b):
+    """a + b, entry by entry."""
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3], a[4] + b[4], a[5] + b[5],
+            a[6] + b[6], a[7] + b[7], a[8] + b[8])
+
+
+@njit(cache=True, inline="always")
+def mat9_vec(a, x, y, z):
+    """A v (as :func:`mat_vec`)."""
+    return (
+        a[0] * x + a[1] * y + a[2] * z,
+        a[3] * x + a[4] * y + a[5] * z,
+        a[6] * x + a[7] * y + a[8] * z,
+    )
+
+
+@njit(cache=True, inline="always")
+def _sandwich_entry(a, s, alpha, beta, usu, ui, uj, sui, suj):
+    return a - (alpha * alpha * s + alpha * beta * (sui * uj + ui * suj) + beta * beta * usu * ui * uj)
+
+
+@njit(cache=True, inline="always")
+def sub_iuu_sandwich9(a, s, alpha, beta, u0, u1, u2):
+    """a - K S K with K = alpha I + beta u u^T and S symmetric (as :func:`sub_iuu_sandwich`)."""
+    su0, su1, su2 = mat9_vec(s, u0, u1, u2)
+    usu = u0 * su0 + u1 * su1 + u2 * su2
+    return (
+        _sandwich_entry(a[0], s[0], alpha, beta, usu, u0, u0, su0, su0),
+        _sandwich_entry(a[1], s[1], alpha, beta, usu, u0, u1, su0, su1),
+        _sandwich_entry(a[2], s[2], alpha, beta, usu, u0, u2, su0, su2),
+        _sandwich_entry(a[3], s[3], alpha, beta, usu, u1, u0, su1, su0),
+        _sandwich_entry(a[4], s[4], alpha, beta, usu, u1, u1, su1, su1),
+        _sandwich_entry(a[5], s[5], alpha, beta, usu, u1, u2, su1, su2),
+        _sandwich_entry(a[6], s[6], alpha, beta, usu, u2, u0, su2, su0),
+        _sandwich_entry(a[7], s[7], alpha, beta, usu, u2, u1, su2, su1),
+        _sandwich_entry(a[8], s[8], alpha, beta, usu, u2, u2, su2, su2),
+    )
+
+
+@njit(cache=True, inline="always")
+def inv3_9(a):
+    """(determinant, inverse) of a 3x3 block by cofactors (as :func:`inv3`); a zero determinant
+    returns (0.0, a)."""
+    a00, a01, a02, a10, a11, a12, a20, a21, a22 = a
+    c00 = a11 * a22 - a12 * a21
+    c01 = a12 * a20 - a10 * a22
+    c02 = a10 * a21 - a11 * a20
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    if det == 0.0:
+        return 0.0, a
+    inv = 1.0 / det
+    return det, (
+        c00 * inv,
+        (a02 * a21 - a01 * a22) * inv,
+        (a01 * a12 - a02 * a11) * inv,
+        c01 * inv,
+        (a00 * a22 - a02 * a20) * inv,
+        (a02 * a10 - a00 * a12) * inv,
+        c02 * inv,
+        (a01 * a20 - a00 * a21) * inv,
+        (a00 * a11 - a01 * a10) * inv,
+    )

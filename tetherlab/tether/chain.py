@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 
-from .._jit import njit
+from .._jit import njit, njit_hot
 from ..kernel.layout import (
     BS_C,
     BS_CF,
@@ -57,6 +57,7 @@ from ..kernel.layout import (
     SJ_SINV,
     SJ_SIZE,
     SR_C,
+    SR_M,
     SR_Q,
     SR_R1,
     SR_R2,
@@ -70,15 +71,15 @@ from ..kernel.layout import (
     TT_SIZE,
     TT_TENSION_ONLY,
 )
-from ..kernel.vec3 import add_iuu, inv3, iuu_vec, mat_vec, sub_iuu_sandwich
+from ..kernel.vec3 import add9, inv3_9, iuu9, iuu_vec, load9, mat9_vec, mat_vec, store9, sub_iuu_sandwich9
 from .reel import reel_rod_load
-from .rod import SQ3, fail, next_joint, rod_force, rod_share
+from .rod import SQ3, fail, next_joint, rod_constants, rod_force, rod_share
 
 __all__ = ["SQ3", "next_joint", "chain_walk", "chain_reduce", "chain_back_substitute", "chain_share",
            "walk", "reduce", "back_substitute", "share"]
 
 
-@njit(cache=True)
+@njit_hot(cache=True)
 def chain_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz):
     """Walk tether k from its attachment point A_1 (position, velocity given) to its end B_n
     (eq. 23), computing (with_forces) every rod's forces on the way.  Returns (failure code,
@@ -90,9 +91,10 @@ def chain_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz):
     energy = int(p[tb + TT_MODEL]) == MODEL_ENERGY
     printed = int(p[tb + TT_MODEL]) == MODEL_PRINTED
     reel = int(p[tb + TT_REEL]) - 1  # the first rod of a tether paid out by a reel varies in length
+    rc = rod_constants(p)
     for g in range(g0, g0 + n):
         if with_forces:
-            code = rod_force(t, q, qd, p, g, tension_only, energy, printed, ax, ay, az, avx, avy, avz)
+            code = rod_force(t, q, qd, p, g, rc, tension_only, energy, printed, ax, ay, az, avx, avy, avz)
             if code != 0:
                 return code, ax, ay, az, avx, avy, avz
             if reel >= 0 and g == g0:
@@ -128,16 +130,18 @@ def _rod_coefficients(p, g):
     )
 
 
-@njit(cache=True)
+@njit_hot(cache=True)
 def chain_reduce(t, p, k):
     """Block Thomas elimination of tether k from its tip to its root (docs/model.md 4.3, 12.4):
     joint j's scratch gets S_j^-1 and s_j; joint 0's are W and s_0 of J_0 = W (s_0 + a_A).  The
-    tip body's compliance (BS_C, BS_CF) must be in its scratch.  Returns a failure code."""
+    tip body's compliance (BS_C, BS_CF) must be in its scratch.  Each rod's M = al I + be u u^T
+    is kept in its scratch (SR_M) for the back substitution.  Returns a failure code."""
     tb = int(p[H_OFF_TETH]) + k * TT_SIZE
     n = int(p[tb + TT_NRODS])
     g0 = int(p[tb + TT_ROD0])
     c = int(p[tb + TT_CHILD])
-    j0 = int(p[H_OFF_SCR]) + int(p[H_NRODS]) * SR_SIZE + (g0 + k) * SJ_SIZE  # n + 1 joint blocks
+    scr = int(p[H_OFF_SCR])
+    j0 = scr + int(p[H_NRODS]) * SR_SIZE + (g0 + k) * SJ_SIZE  # n + 1 joint blocks
     has_tip = c >= 0
     last = n if has_tip else n - 1
     cbs = int(p[H_OFF_BSCR]) + c * BS_SIZE if has_tip else 0
@@ -145,38 +149,38 @@ def chain_reduce(t, p, k):
     npa = nbe = nal = nux = nuy = nuz = nax = nay = naz = 0.0
     if not has_tip:
         npa, nbe, nal, nux, nuy, nuz, nax, nay, naz, _, _, _ = _rod_coefficients(p, g0 + n - 1)
+        _keep_m(p, scr, g0 + n - 1, nal, nbe)
+    # the joint eliminated before this row (row + 1): S^-1 and s, carried in registers
+    zero = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    nsi = zero
+    nsx = nsy = nsz = 0.0
     for row in range(last, -1, -1):
         jb = j0 + row * SJ_SIZE
-        S = jb + SJ_SINV  # assemble the diagonal block here, invert in place afterwards
-        for cc in range(9):
-            p[S + cc] = 0.0
+        S = zero  # the diagonal block, assembled in registers and inverted at the end of the row
         bx = 0.0
         by = 0.0
         bz = 0.0
         if row >= 1:  # rod `row`: P and alpha_B
             pa, be, al, ux, uy, uz, aax, aay, aaz, abx, aby, abz = _rod_coefficients(p, g0 + row - 1)
-            add_iuu(p, S, pa, be, ux, uy, uz)
+            _keep_m(p, scr, g0 + row - 1, al, be)
+            S = add9(S, iuu9(pa, be, ux, uy, uz))
             bx += abx
             by += aby
             bz += abz
         if row < n:  # rod row+1: P and -alpha_A
-            add_iuu(p, S, npa, nbe, nux, nuy, nuz)
+            S = add9(S, iuu9(npa, nbe, nux, nuy, nuz))
             bx -= nax
             by -= nay
             bz -= naz
         else:  # row == n: the tip body, a_B = C J_n + f
-            for cc in range(9):
-                p[S + cc] += p[cbs + BS_C + cc]
+            S = add9(S, load9(p, cbs + BS_C))
             bx -= p[cbs + BS_CF]
             by -= p[cbs + BS_CF + 1]
             bz -= p[cbs + BS_CF + 2]
         # eliminate J_{row+1}: S -= M_{row+1} S_{row+1}^-1 M_{row+1}, b -= M S^-1 s
         if row < last:
-            nb = jb + SJ_SIZE  # next joint block (already eliminated: holds S^-1 and s)
-            Si = nb + SJ_SINV
-            sub_iuu_sandwich(p, S, Si, nal, nbe, nux, nuy, nuz)
-            sn = nb + SJ_S
-            v0, v1, v2 = mat_vec(p, Si, p[sn], p[sn + 1], p[sn + 2])
+            S = sub_iuu_sandwich9(S, nsi, nal, nbe, nux, nuy, nuz)
+            v0, v1, v2 = mat9_vec(nsi, nsx, nsy, nsz)
             mx, my, mz = iuu_vec(nal, nbe, nux, nuy, nuz, v0, v1, v2)
             bx -= mx
             by -= my
@@ -184,9 +188,14 @@ def chain_reduce(t, p, k):
         p[jb + SJ_S] = bx
         p[jb + SJ_S + 1] = by
         p[jb + SJ_S + 2] = bz
-        det = inv3(p, S, p, S)
+        det, nsi = inv3_9(S)
         if det == 0.0 or not math.isfinite(det):
+            store9(p, jb + SJ_SINV, S)
             return fail(p, FAIL_SINGULAR, g0 + (row if row < n else n - 1), t, det)
+        store9(p, jb + SJ_SINV, nsi)
+        nsx = bx
+        nsy = by
+        nsz = bz
         if row >= 1:
             npa = pa
             nbe = be
@@ -201,10 +210,19 @@ def chain_reduce(t, p, k):
 
 
 @njit(cache=True, inline="always")
-def _rod_acceleration(p, acc, g, ja):
-    """d'' of rod g from eq. 26, m d'' = Q - C (J_{i-1} + J_i), J_{i-1} at p[ja], J_i after it."""
-    sb = int(p[H_OFF_SCR]) + g * SR_SIZE
-    m = p[int(p[H_OFF_ROD]) + g * RT_SIZE + RT_M]
+def _keep_m(p, scr, g, al, be):
+    """Rod g's M = al I + be u u^T into its scratch: the back substitution reads it there."""
+    sb = scr + g * SR_SIZE
+    p[sb + SR_M] = al
+    p[sb + SR_M + 1] = be
+
+
+@njit(cache=True, inline="always")
+def _rod_acceleration(p, scr, offr, acc, g, ja):
+    """d'' of rod g from eq. 26, m d'' = Q - C (J_{i-1} + J_i), J_{i-1} at p[ja], J_i after it
+    (scr, offr: the rod scratch and rod table offsets)."""
+    sb = scr + g * SR_SIZE
+    m = p[offr + g * RT_SIZE + RT_M]
     jbb = ja + SJ_SIZE
     sx = p[ja] + p[jbb]
     sy = p[ja + 1] + p[jbb + 1]
@@ -221,7 +239,7 @@ def _rod_acceleration(p, acc, g, ja):
     return True
 
 
-@njit(cache=True)
+@njit_hot(cache=True)
 def chain_back_substitute(t, p, k, aax, aay, aaz, acc):
     """Given the acceleration a_A of tether k's attachment point: J_0 = W (s_0 + a_A), then
     J_k = S_k^-1 (s_k - M_k J_{k-1}) to the tip (J_n = 0 at a free end), and every rod's d'' into
@@ -243,25 +261,22 @@ def chain_back_substitute(t, p, k, aax, aay, aaz, acc):
         jb = j0 + row * SJ_SIZE
         g = g0 + row - 1  # rod `row` couples J_{row-1} and J_row
         sb = scr + g * SR_SIZE
-        m = p[offr + g * RT_SIZE + RT_M]
-        c1 = p[sb + SR_C]
-        c2 = p[sb + SR_C + 1]
-        al = (SQ3 * c1 - 1.0) / m
-        be = SQ3 * c2 / m
+        al = p[sb + SR_M]  # M of rod `row`, kept by chain_reduce
+        be = p[sb + SR_M + 1]
         pj = jb - SJ_SIZE + SJ_J
         mx, my, mz = iuu_vec(al, be, p[sb + SR_U], p[sb + SR_U + 1], p[sb + SR_U + 2], p[pj], p[pj + 1], p[pj + 2])
         jx, jy, jz = mat_vec(p, jb + SJ_SINV, p[jb + SJ_S] - mx, p[jb + SJ_S + 1] - my, p[jb + SJ_S + 2] - mz)
         p[jb + SJ_J] = jx
         p[jb + SJ_J + 1] = jy
         p[jb + SJ_J + 2] = jz
-        if not _rod_acceleration(p, acc, g, pj):
+        if not _rod_acceleration(p, scr, offr, acc, g, pj):
             return fail(p, FAIL_NONFINITE, g, t, 0.0)
     if not has_tip:  # free end: no reaction at B_n
         jn = j0 + n * SJ_SIZE + SJ_J
         p[jn] = 0.0
         p[jn + 1] = 0.0
         p[jn + 2] = 0.0
-        if not _rod_acceleration(p, acc, g0 + n - 1, jn - SJ_SIZE):
+        if not _rod_acceleration(p, scr, offr, acc, g0 + n - 1, jn - SJ_SIZE):
             return fail(p, FAIL_NONFINITE, g0 + n - 1, t, 0.0)
     return 0
 

@@ -17,7 +17,13 @@ from __future__ import annotations
 import math
 
 from .._jit import njit
-from ..kernel.effects import potential_per_mass, rod_force_density
+from ..kernel.effects import (
+    count_rod_nodes,
+    potential_per_mass,
+    rod_central_gravity_density,
+    rod_central_gravity_only,
+    rod_force_density,
+)
 from ..kernel.layout import (
     FAIL_ROD_COLLAPSE,
     H_FAIL_CODE,
@@ -84,20 +90,27 @@ def next_joint(q, qd, g, ax, ay, az, avx, avy, avz):
 
 
 @njit(cache=True, inline="always")
-def rod_force(t, q, qd, p, g, tension_only, energy, printed, ax, ay, az, avx, avy, avz):
+def rod_constants(p):
+    """What every rod of a walk reads from the block's header, read once per walk: the rod table,
+    rod scratch and quadrature offsets, the nodes per half rod, the minimum strain, the defect code
+    and central gravity's parameter offset when it is the only effect (else -1).  Read per rod,
+    they are reloaded after every store to the scratch (the compiler cannot tell them apart)."""
+    return (int(p[H_OFF_ROD]), int(p[H_OFF_SCR]), int(p[H_OFF_QUAD]), int(p[H_NQ]), p[H_MIN_STRAIN],
+            int(p[H_MUTANT]), rod_central_gravity_only(p))
+
+
+@njit(cache=True, inline="always")
+def rod_force(t, q, qd, p, g, rc, tension_only, energy, printed, ax, ay, az, avx, avy, avz):
     """Geometry, elastic force and distributed forces of rod g whose end A is at (ax.., avx..):
-    writes R_1, R_2, Q, C, u, F_E, strain and strain rate to its scratch.  Returns a failure code."""
-    offr = int(p[H_OFF_ROD])
-    scr = int(p[H_OFF_SCR])
-    offq = int(p[H_OFF_QUAD])
-    nq = int(p[H_NQ])
-    min_strain = p[H_MIN_STRAIN]
+    writes R_1, R_2, Q, C, u, F_E, strain and strain rate to its scratch (rc: rod_constants).
+    Returns a failure code."""
+    offr, scr, offq, nq, min_strain, mutant, cg = rc
     rb = offr + g * RT_SIZE
     m = p[rb + RT_M]
     lu = p[rb + RT_LU]
     ea = p[rb + RT_EA]
     damp = p[rb + RT_D]
-    mutant = int(p[H_MUTANT])  # 0 in every user run (tetherlab/mutants.py: negative controls)
+    # mutant: 0 in every user run (tetherlab/mutants.py: negative controls)
     if mutant == MUT_DAMPING_SIGN:
         damp = -damp
     dx = q[3 + 3 * g]
@@ -135,27 +148,49 @@ def rod_force(t, q, qd, p, g, tension_only, energy, printed, ax, ay, az, avx, av
     tx = SQ3 * dx
     ty = SQ3 * dy
     tz = SQ3 * dz
-    for j in range(2 * nq):
-        xi = p[offq + j]
-        w = p[offq + 2 * nq + j]
-        s = 1.0 + xi
-        fx, fy, fz = rod_force_density(
-            p, t, g,
-            ax + s * tx, ay + s * ty, az + s * tz,
-            avx + s * SQ3 * ddx, avy + s * SQ3 * ddy, avz + s * SQ3 * ddz,
-            tx, ty, tz, mxi,
-        )
-        if xi < 0.0:
-            r1x += w * fx
-            r1y += w * fy
-            r1z += w * fz
-        else:
-            r2x += w * fx
-            r2y += w * fy
-            r2z += w * fz
-        qlx += SQ3 * xi * w * fx
-        qly += SQ3 * xi * w * fy
-        qlz += SQ3 * xi * w * fz
+    if cg >= 0:
+        # central gravity alone (the common case): the same sums in a loop of its own, with no
+        # effect dispatch and no call in it, so its sums stay in registers
+        mu = p[cg]
+        count_rod_nodes(p, 2.0 * nq)
+        for j in range(2 * nq):
+            xi = p[offq + j]
+            w = p[offq + 2 * nq + j]
+            s = 1.0 + xi
+            fx, fy, fz = rod_central_gravity_density(p, mu, t, ax + s * tx, ay + s * ty, az + s * tz, mxi)
+            if xi < 0.0:
+                r1x += w * fx
+                r1y += w * fy
+                r1z += w * fz
+            else:
+                r2x += w * fx
+                r2y += w * fy
+                r2z += w * fz
+            qlx += SQ3 * xi * w * fx
+            qly += SQ3 * xi * w * fy
+            qlz += SQ3 * xi * w * fz
+    else:
+        for j in range(2 * nq):
+            xi = p[offq + j]
+            w = p[offq + 2 * nq + j]
+            s = 1.0 + xi
+            fx, fy, fz = rod_force_density(
+                p, t, g,
+                ax + s * tx, ay + s * ty, az + s * tz,
+                avx + s * SQ3 * ddx, avy + s * SQ3 * ddy, avz + s * SQ3 * ddz,
+                tx, ty, tz, mxi,
+            )
+            if xi < 0.0:
+                r1x += w * fx
+                r1y += w * fy
+                r1z += w * fz
+            else:
+                r2x += w * fx
+                r2y += w * fy
+                r2z += w * fz
+            qlx += SQ3 * xi * w * fx
+            qly += SQ3 * xi * w * fy
+            qlz += SQ3 * xi * w * fz
     sb = scr + g * SR_SIZE
     p[sb + SR_R1] = r1x
     p[sb + SR_R1 + 1] = r1y

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 
-from .._jit import njit
+from .._jit import njit, njit_hot
 from ..bodies.parts import (
     body_add_child,
     body_attach,
@@ -85,7 +85,7 @@ from .reel import reel_body_forces, reel_update
 from .rod import fail, next_joint
 
 
-@njit(cache=True)
+@njit_hot(cache=True)
 def forward(t, q, qd, att, p, with_forces):
     """Kinematics of the whole forest, roots to leaves: every body's centre of mass (and attitude),
     every tether's attachment point A_1 and end B_n, and (with_forces) every rod's forces.
@@ -131,7 +131,7 @@ def forward(t, q, qd, att, p, with_forces):
     return 0
 
 
-@njit(cache=True)
+@njit_hot(cache=True)
 def system_accelerations(t, q, qd, att, p, acc, datt):
     """Accelerations of q_trans into ``acc`` and the derivatives of the attitude and wheel block
     into ``datt`` (empty for a point-mass scene).  Leaves in the scratch area, per joint, the
