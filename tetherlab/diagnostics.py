@@ -308,7 +308,11 @@ def internal_angular_momentum_scale(model, y) -> float:
         )
         hw = sum((np.asarray(wh.axis) * y[model.wheel_index[(b, wh.name)]] for wh in rs.wheels), np.zeros(3))
         spin += float(np.linalg.norm(js @ w + hw))
-    for i in range(model.n_rods):
-        for s in (-1.0, 1.0):
-            items.append((0.5 * mr[i], pts["rG"][i] + s * pts["d"][i], pts["vG"][i] + s * pts["dd"][i]))
-    return spin + float(sum(m * np.linalg.norm(np.cross(r - rc, v - vc)) for m, r, v in items))
+    # the two TMED masses of every rod, in the order rod 1 (-, +), rod 2 (-, +), ...: the cross
+    # products in one call (elementwise, so the same numbers), then each norm and the sum in order
+    sign = np.tile([-1.0, 1.0], model.n_rods)[:, None]
+    r_all = np.vstack([np.zeros((0, 3))] + [r for _, r, _ in items] + [np.repeat(pts["rG"], 2, axis=0) + sign * np.repeat(pts["d"], 2, axis=0)])
+    v_all = np.vstack([np.zeros((0, 3))] + [v for _, _, v in items] + [np.repeat(pts["vG"], 2, axis=0) + sign * np.repeat(pts["dd"], 2, axis=0)])
+    masses = [m for m, _, _ in items] + list(np.repeat(0.5 * mr, 2))
+    arms = np.cross(r_all - rc, v_all - vc)
+    return spin + float(sum(m * np.linalg.norm(a) for m, a in zip(masses, arms)))

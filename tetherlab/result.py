@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from . import diagnostics as diag
-from .system import point_positions
+from .kinematics import center_of_mass_rows, point_rows
 
 
 def library_versions() -> dict:
@@ -72,17 +72,12 @@ class Result:
         cols: dict[str, np.ndarray] = {"t_s": np.asarray(t, float)}
         nrows = len(t)
         nb = len(model.bodies)
-        # every joint and body per row, from the compiled forest walk (tether/chain.py)
-        allj = np.full((nrows, model.n_rods + len(model.tethers), 6), np.nan)
-        bodies = np.full((nrows, nb, 6), np.nan)
-        rots = np.full((nrows, nb, 3, 3), np.nan)
-        for row in range(nrows):
-            pts = point_positions(model, Y[row])
-            bodies[row] = pts["bodies"]
-            rots[row] = pts["rotations"]
-            for k, sl in enumerate(model.rod_slices):
-                allj[row, sl.start + k : sl.stop + k + 1, :3] = pts["joints"][k]
-                allj[row, sl.start + k : sl.stop + k + 1, 3:] = pts["jvel"][k]
+        # every joint and body at every row, from the compiled forest walk in one pass
+        # (tetherlab/kinematics.py; the joints of every tether tile the rows' joint blocks)
+        pts_rows = point_rows(model, Y)
+        allj = pts_rows["joints"]
+        bodies = pts_rows["bodies"]
+        rots = pts_rows["rotations"]
         for b, body in enumerate(model.bodies):
             if not body.name or (b > 0 and not body.mass_kg > 0 and not body.fixed):
                 continue
@@ -120,11 +115,12 @@ class Result:
             for i in range(tet.rods):
                 cols[f"{tet.name}.rod{i + 1}.strain"] = rods[:, i, 0]
                 cols[f"{tet.name}.rod{i + 1}.axial_force_N"] = rods[:, i, 1]
+            reaction = np.linalg.norm(jr, axis=2)  # the same reduction per joint, all joints at once
             for j in range(tet.rods + 1):
-                cols[f"{tet.name}.joint{j}.reaction_N"] = np.linalg.norm(jr[:, j, :], axis=1)
+                cols[f"{tet.name}.joint{j}.reaction_N"] = reaction[:, j]
             g_rod += tet.rods
             g_joint += tet.rods + 1
-        ts = pd.DataFrame(cols)
+        ts = _frame(cols, nrows)
 
         g = d["global"]
         dcols = {
@@ -157,7 +153,7 @@ class Result:
             h_int = diag.internal_angular_momentum_scale(model, Y[0])
             dcols["angmom_error_internal"] = dH / h_int if h_int > 0 else np.full(nrows, np.nan)
             # libration angles of each tether (root -> tip line) in the centre of mass's orbital frame
-            rc, vc = _center_of_mass_rows(model, Y)
+            rc, vc = center_of_mass_rows(model, pts_rows)
             for k, tet in enumerate(model.tethers):
                 pos = nodes[tet.name]
                 if np.linalg.norm(np.cross(rc[0], vc[0])) > 0:
@@ -168,7 +164,7 @@ class Result:
                 dcols[f"{tet.name}.phi_rad"] = ph
             dcols["com_radius_m"] = np.linalg.norm(rc, axis=1)
             dcols.update(_orbital_columns(scene, model, np.asarray(t, float), rc, vc))
-        dg = pd.DataFrame(dcols)
+        dg = _frame(dcols, nrows)
         scene_dict = scene.to_dict() if hasattr(scene, "to_dict") else {}
         meta = {
             "versions": library_versions(),
@@ -218,6 +214,19 @@ class Result:
         meta = {k: v for k, v in run.items() if k not in {"status", "ok", "message", "stats", "scene"}}
         status = run.get("status", 0 if run.get("state") == "complete" else -1)
         return cls(ts, dg, run.get("stats", {}), status, run.get("message", ""), run.get("scene", {}), meta)
+
+
+def _frame(cols: dict, nrows: int) -> pd.DataFrame:
+    """The table of ``cols`` (name: column), as ``pd.DataFrame(cols)`` gives it.  Float columns
+    are copied into one 2-D array first: pandas then builds one block instead of checking and
+    stacking hundreds of columns one by one (a third of a short run's set-up at 32 rods)."""
+    arrays = list(cols.values())
+    if not all(isinstance(a, np.ndarray) and a.dtype == np.float64 and a.shape == (nrows,) for a in arrays):
+        return pd.DataFrame(cols)
+    block = np.empty((nrows, len(arrays)))
+    for j, a in enumerate(arrays):
+        block[:, j] = a
+    return pd.DataFrame(block, columns=list(cols), copy=False)
 
 
 def _read_parts(folder: Path) -> pd.DataFrame:
@@ -322,16 +331,6 @@ def _orbital_columns(scene, model, t, rc, vc) -> dict:
         lat, lon, height = osculating.geodetic(osculating.earth_fixed(t, rc, theta0))
         out.update(latitude_rad=lat, longitude_rad=lon, geodetic_height_m=height)
     return out
-
-
-def _center_of_mass_rows(model, Y):
-    from .system import center_of_mass
-
-    rc = np.empty((len(Y), 3))
-    vc = np.empty((len(Y), 3))
-    for i, y in enumerate(Y):
-        rc[i], vc[i] = center_of_mass(model, y)
-    return rc, vc
 
 
 def _effect_counts(p, model) -> dict:

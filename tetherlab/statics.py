@@ -164,10 +164,20 @@ def shot_joints(root_m, tip_m, lengths_m, masses_kg, ea_N, g_m_s2, tip_load_N, *
     along the chord of the weight of the whole system.  This is the discrete elastic catenary, so
     it is exact for the model under uniform gravity; the caller still polishes the answer with the
     model's own equations.  Returns (joints, J_n), or None if the shooting does not converge (a tether with a slack point)."""
+    weights = np.asarray(masses_kg, float)[:, None] * np.asarray(g_m_s2, float)[None, :]
+    g_hat = np.asarray(g_m_s2, float) / max(float(np.linalg.norm(g_m_s2)), 1e-300)
+    return shot_under_loads(root_m, tip_m, lengths_m, weights, ea_N, tip_load_N, g_hat, max_iter=max_iter)
+
+
+def shot_under_loads(root_m, tip_m, lengths_m, rod_loads_N, ea_N, tip_load_N, down, *, max_iter: int = 60):
+    """The march of :func:`shot_joints` with a given external force on every rod (``rod_loads_N``,
+    (n, 3): J_{i-1} = J_i - R_i) and ``down`` the direction the loads pull (the starts' "down").
+    Exact for loads that do not depend on where the rods are; for loads that do (an orbit), the
+    caller repeats it with the loads of the shape found (docs/catenary.md section 3.1)."""
     r0 = np.asarray(root_m, float)
     rf = np.asarray(tip_m, float)
     lengths = np.asarray(lengths_m, float)
-    weights = np.asarray(masses_kg, float)[:, None] * np.asarray(g_m_s2, float)[None, :]
+    weights = np.asarray(rod_loads_N, float)
     ea = np.asarray(ea_N, float)
     n = lengths.size
     total = float(lengths.sum())
@@ -192,7 +202,7 @@ def shot_joints(root_m, tip_m, lengths_m, masses_kg, ea_N, g_m_s2, tip_load_N, *
     weight = float(np.linalg.norm(below[0])) + float(np.linalg.norm(np.asarray(tip_load_N, float)))
     force = max(weight, 1e-300)
     chord = (r0 - rf) / max(float(np.linalg.norm(r0 - rf)), 1e-300)
-    g_hat = np.asarray(g_m_s2, float) / max(float(np.linalg.norm(g_m_s2)), 1e-300)
+    g_hat = np.asarray(down, float)
     # starts: pulls along the chord (a taut tether), down (the tether reaching the end mass from
     # below: a loop hanging under it), up, and half-way between, each at multiples of the weight
     # from 0.003 (a loop whose bottom carries almost nothing) to 30 (a taut, stretched tether)
@@ -243,6 +253,34 @@ def _shoot_from(jn, miss, joints_of, force, max_iter):
     return None
 
 
+def _field_shot(joints, root_m, tip_m, lengths_m, ea_N, loads_at, rounds: int = 30):
+    """The shooting under loads that depend on where the rods are (central gravity, its harmonics):
+    the loads of the shape ``joints`` are frozen, the chain shot under them
+    (:func:`shot_under_loads`), and the loads taken again at the new shape, until the joints move
+    by less than 1e-13 of the length (a fixed point: over a tether much shorter than its distance
+    to the attracting centre the loads change by ~length/radius of themselves, so each round gains
+    that factor).  Returns (joints, J_n, the end mass's load), or None."""
+    total = float(np.sum(lengths_m))
+    found = None
+    for _ in range(rounds):
+        loads = loads_at(joints)
+        if loads is None:
+            return None
+        rod_loads, tip_load = loads
+        pull = rod_loads.sum(axis=0) + tip_load
+        if not np.linalg.norm(pull) > 0.0:
+            return None
+        shot = shot_under_loads(root_m, tip_m, lengths_m, rod_loads, ea_N, tip_load, pull / np.linalg.norm(pull))
+        if shot is None:
+            return None
+        moved = float(np.max(np.abs(shot[0] - joints)))
+        joints = shot[0]
+        found = (shot[0], shot[1], tip_load)
+        if moved < 1e-13 * total:
+            break
+    return found
+
+
 def hang_joints(root_m, lengths_m, masses_kg, p, g_m_s2, tip_load_N) -> np.ndarray:
     """Joints (n + 1, 3) of the tether hanging free from ``root_m`` under uniform gravity: the
     march of :func:`shot_joints` with the pull on the end mass known, J_n = -tip_load_N."""
@@ -279,10 +317,22 @@ def _fd_jacobian(evaluate, x, f):
     return jac
 
 
+#: The plain Newton gives up once its residual has risen in STALL_ITERATIONS iterations in a row
+#: (each such step is taken only because backtracking found no step that lowers it): it is
+#: wandering, and the fallback takes over at once instead of after max_iter iterations.  Where it
+#: converged, over the statics grid of docs/catenary.md 3.1 (1-64 rods, EA 4e4-1e9 N, ten holds),
+#: it never rose more than 11 times in a row, so those solves are bit for bit what they were.  A
+#: test on the residual's progress instead (not halved in k iterations) would have to wait 52
+#: iterations to spare them: solves that converge cross plateaus that long.
+STALL_ITERATIONS = 15
+
+
 def _plain_newton(evaluate, x, f, converged, max_iter):
     """Newton with backtracking on the residual norm: the solve of the first versions, kept
-    step for step so that every equilibrium it finds stays bit for bit what it was."""
+    step for step so that every equilibrium it finds stays bit for bit what it was; it stops
+    early when it stalls (``STALL_ITERATIONS``)."""
     it = 0
+    rises = 0
     for it in range(1, max_iter + 1):
         jac = _fd_jacobian(evaluate, x, f)
         dx = np.linalg.solve(jac, -f)
@@ -296,9 +346,13 @@ def _plain_newton(evaluate, x, f, converged, max_iter):
             lam *= 0.5
             if lam < 1e-6:
                 raise _NoConvergence("Newton stalled (no step lowers the residual)")
+        rose = not np.linalg.norm(fn) < norm0
         x, f = xn, fn
         if converged(f, dx, lam == 1.0):
             return x, f, it
+        rises = rises + 1 if rose else 0
+        if rises >= STALL_ITERATIONS:
+            raise _NoConvergence(f"the residual rose in {STALL_ITERATIONS} Newton iterations in a row (stopped at {it})")
     raise _NoConvergence(f"no convergence in {max_iter} Newton iterations")
 
 
@@ -423,6 +477,16 @@ def solve(
         x[: 3 * n] = (np.diff(joints, axis=0) / (2.0 * SQ3)).ravel() / d_scale
         return x
 
+    def _loads_at(jts):
+        """(external force on every rod (n, 3), on the end mass (3)) of the model at the shape
+        ``jts`` at rest, nothing holding the end mass: the kernel's own loads (rod scratch R_1 + R_2,
+        eqs. 11-18, and the end mass's force; tetherlab/tether/rod.py)."""
+        xl = unknowns(jts)  # R_f = 0 in it
+        if evaluate(xl) is None:
+            return None
+        rs = ParamView(p).rod_scratch
+        return rs.r1[:n] + rs.r2[:n], ParamView(p).body_scratch.f_eff[1, :3].copy()
+
     joints = sagging_guess(r0, rf, total, n, down) if guess_joints is None else np.asarray(guess_joints, float)
     if joints.shape != (n + 1, 3):
         raise ValueError(f"guess_joints: expected shape {(n + 1, 3)}, got {joints.shape}")
@@ -461,6 +525,18 @@ def solve(
                         method = "shooting"
                     except (_NoConvergence, np.linalg.LinAlgError):
                         x = None
+        elif guess_joints is None:  # loads that depend on where the rods are (an orbit)
+            shot = _field_shot(sagging_guess(r0, rf, total, n, down), r0, rf, model.rod_lengths(), ea_rods, _loads_at)
+            if shot is not None:
+                xs = unknowns(shot[0])
+                xs[3 * n :] = -(shot[1] + shot[2]) / f_scale  # R_f + J_n + the end mass's loads = 0
+                fs = evaluate(xs)
+                if fs is not None:
+                    try:
+                        x, f, it = _trust_newton(evaluate, xs, fs, converged, max_iter)
+                        method = "shooting"
+                    except (_NoConvergence, np.linalg.LinAlgError):
+                        x = None
         if x is None and guess_joints is not None:
             # a guess that is already the answer leaves the plain solve at its round-off floor,
             # where no full step lowers the residual: the trust region accepts it there
@@ -485,8 +561,8 @@ def solve(
     if first_error is not None and x is None:
         why = (
             "the shooting found no discrete catenary (a tether folded back on itself, or slack)"
-            if loads is not None
-            else "no fallback for these loads (the shooting is for uniform gravity and constant forces on the end mass)"
+            if guess_joints is None
+            else "the trust region from the guess did not converge"
         )
         raise ValueError(f"statics.solve: no convergence: Newton from the sagging guess ({first_error}); {why}")
     f = evaluate(x)  # leaves the reactions of the solution in the scratch area of p

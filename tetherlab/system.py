@@ -499,12 +499,13 @@ def chain_state(
     w = np.zeros(3) if omega is None else np.asarray(omega, float)
     for k, _ in enumerate(model.tethers):
         sl = model.rod_slices[k]
-        dirs = np.asarray(rod_dirs[k], float)
+        dirs = np.asarray(rod_dirs[k], float).reshape(-1, 3)
+        norms = np.array([np.linalg.norm(dj) for dj in dirs])  # each as a 3-vector's norm
+        d = (dirs / norms[:, None]) * lengths[sl, None] * (1.0 + strains[k]) / (2.0 * SQ3)  # eq. 3
+        dd = np.cross(w, d)  # elementwise: the same numbers as one rod at a time
         for j, g in enumerate(range(sl.start, sl.stop)):
-            u = dirs[j] / np.linalg.norm(dirs[j])
-            d = u * lengths[g] * (1.0 + strains[k]) / (2.0 * SQ3)  # eq. 3
-            y[lay.rod(g)] = d
-            y[lay.rod_rate(g)] = np.cross(w, d)
+            y[lay.rod(g)] = d[j]
+            y[lay.rod_rate(g)] = dd[j]
     y[lay.first_order] = attitude_block(model, {})
     return y
 
