@@ -173,11 +173,15 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
     # The relative equilibrium is a rigid rotation under the conservative effects; a velocity-
     # dependent or time-dependent force (electrodynamic, drag, third bodies) has none, so the
     # equilibrium is solved without them and they act from t = 0 (docs/scenes.md, orbit.motion).
+    # An inextensible tether's relative equilibrium is solved as the elastic one of its EA (the
+    # rods' strains are the unknowns there); its start then restores the lengths
+    # (tetherlab/initial/inextensible.py).
     eq_model = model
-    if any(not spec.conservative for spec, _ in effects):
+    inext = any(s.model == "inextensible" for s in specs)
+    if any(not spec.conservative for spec, _ in effects) or inext:
         eq_model = build_model(
             root_mass_kg=root.mass_kg,
-            tethers=specs,
+            tethers=[inextensible.elastic_stand_in(s) for s in specs],
             effects=[(spec, prm) for spec, prm in effects if spec.conservative],
             central=central,
             quadrature=nq,

@@ -13,6 +13,7 @@ model does not describe; the event that stops a run there is kernel/events.py's)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -29,6 +30,14 @@ def default_rate_1_s(t_unit_s: float) -> float:
     mean motion on an orbit, 1/s on the surface).  docs/inextensible.md section 4: a violation
     decays over one such time, below any resolved frequency, so it adds no stiffness."""
     return 1.0 / t_unit_s
+
+
+def elastic_stand_in(spec):
+    """The elastic tether of the same EA in place of an inextensible TetherSpec: what the static
+    and relative-equilibrium solves take (their unknowns include the rods' strains)."""
+    if spec.model != INEXTENSIBLE:
+        return spec
+    return dataclasses.replace(spec, model="paper", part="")
 
 
 def has_inextensible(model) -> bool:
