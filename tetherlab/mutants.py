@@ -340,7 +340,7 @@ MUTANTS = {
             "docs/inextensible.md 4 (the drift of an unstabilised index-reduced constraint grows with time)",
             ("inextensible_drift",),
             mutate=_unstabilised,
-            path="tether",
+            path="inextensible",
         ),
     )
 }

@@ -27,7 +27,7 @@ PROBES = [
     ("lateral", lambda rows: check_lateral_mode(rows, kinds=("paper", "energy")), {"tether", "integrator"}),
     ("catenary", lambda rows: check_catenary_probe(rows), {"tether", "statics"}),
     ("hanging_chain", lambda rows: check_hanging_chain(rows, ns=(8,), models=("paper",)), {"tether", "integrator"}),
-    ("inextensible", lambda rows: check_inextensible(rows, quick=True), {"tether", "integrator"}),
+    ("inextensible", lambda rows: check_inextensible(rows, quick=True), {"tether", "integrator", "inextensible"}),
     ("heyoka_orbits", lambda rows: check_heyoka_orbits(rows), {"gravity", "integrator"}),
     ("stiefel", lambda rows: check_stiefel_probe(rows), {"gravity", "moon", "integrator", "dromo"}),
     ("de421", lambda rows: check_de421(rows), {"de421"}),
