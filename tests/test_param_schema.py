@@ -210,8 +210,8 @@ def test_an_overlapping_record_is_refused():
 
 
 def test_a_record_larger_than_its_size_is_refused():
-    bad = dataclasses.replace(S.ROD, size=4)
-    with pytest.raises(S.SchemaError, match=r"record 'rod': its fields need 5 slots, more than its size 4"):
+    bad = dataclasses.replace(S.ROD, size=5)
+    with pytest.raises(S.SchemaError, match=r"record 'rod': its fields need 6 slots, more than its size 5"):
         S.layout_constants(records=tuple(bad if r is S.ROD else r for r in S.RECORDS))
 
 

@@ -42,16 +42,19 @@ def test_the_check_command_passes_on_the_checked_in_dispatchers():
     assert dispatch.out_of_date() == [] and dispatch.main(["--check"]) == 0
 
 
-def test_one_tether_part_is_a_direct_call_and_a_second_adds_branches(tmp_path):
-    # with the rod chain alone no kind is read; a second tether part type (a reel, say) adds one
-    # branch to each tether dispatcher, the chain staying the default
-    text = dispatch.render(dispatch.TETHER)
-    assert "kind ==" not in text and "return _chain_walk(t, q, qd, p, k" in text
+def test_one_tether_part_is_a_direct_call_and_each_more_adds_branches(tmp_path):
+    # with the rod chain alone no kind is read; the inextensible chain (code 1) is a branch in each
+    # tether dispatcher, the chain staying the default, and one more part type (a reel, say) adds
+    # another
     folder = tmp_path / "tether"
     shutil.copytree(ROOT / "tetherlab" / "tether", folder)
+    one = dispatch.render(dispatch.TETHER, tether_registry.PARTS[:1], folder)
+    assert "kind ==" not in one and "return _chain_walk(t, q, qd, p, k" in one
+    text = dispatch.render(dispatch.TETHER)
+    assert text.count("kind == 1:") == len(tether_registry.INTERFACE) and "return _chain_walk(t, q, qd, p, k" in text
     (folder / "reel.py").write_text("".join(f"def {v}({sig}):\n    pass\n" for v, sig in tether_registry.INTERFACE.items()))
-    two = dispatch.render(dispatch.TETHER, tether_registry.PARTS + (PartType(1, "reel", "reel"),), folder)
-    assert two.count("kind == 1:") == len(tether_registry.INTERFACE) and "from .reel import (" in two
+    more = dispatch.render(dispatch.TETHER, tether_registry.PARTS + (PartType(2, "reel", "reel"),), folder)
+    assert more.count("kind == 2:") == len(tether_registry.INTERFACE) and "from .reel import (" in more
 
 
 def test_one_more_line_adds_a_branch_to_every_dispatcher(tmp_path):
@@ -103,7 +106,8 @@ def test_a_body_or_tether_names_a_part_type_that_exists():
         registry.part_of(BodySpec("a", 1.0, part="reel"))
     t = TetherSpec("t", 2, 10.0, 1e4, 1.0)
     assert tether_registry.part_of(t).name == "chain"
-    with pytest.raises(ValueError, match="part: expected one of \\['chain'\\], got 'rope'"):
+    assert tether_registry.part_of(TetherSpec("t", 2, 10.0, 1e4, 1.0, part="inextensible")).name == "inextensible"
+    with pytest.raises(ValueError, match="part: expected one of \\['chain', 'inextensible'\\], got 'rope'"):
         tether_registry.part_of(TetherSpec("t", 2, 10.0, 1e4, 1.0, part="rope"))
 
 

@@ -160,6 +160,10 @@ EXTRA_SECTIONS = (
     ("hanging_chain", "Hanging chain with a tip mass, 35 s, RADAU5: wall time (set-up included) to reach 1e-4 and "
                       "1e-5 in the first lateral frequency from the mode start, the angle release and the held start "
                       "(docs/hanging-chain.md 4); last rows: fitted exponents in n"),
+    ("hanging_chain_inextensible", "Hanging chain with a tip mass, 35 s, model inextensible, DOP853 and Vern9: wall "
+                                   "time (set-up included) to reach 1e-4 and 1e-5 in the first lateral frequency from "
+                                   "the mode start (docs/inextensible.md 7; target <= 0.10 s at 32 rods); last rows: "
+                                   "fitted exponents in n (target <= 1.2)"),
     ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity"),
     ("igrf", "IGRF-14 field: cost of one evaluation against the degree (target: degree 13 in a few us)"),
     ("rigid", "Right-hand-side cost: rigid root + 3 wheels + 4 tethers against the point-mass hub"),

@@ -111,6 +111,10 @@ def stop_reason(record: dict) -> str:
             pass
         when = f" at {_fmt_time(float(t_end))}" if t_end is not None else ""
         return f"stop altitude {alt} reached{when}"
+    if by and by.startswith("inextensible."):
+        from .pipeline import inextensible_stop_text
+
+        return inextensible_stop_text(by, float(t_end) if t_end is not None else float("nan"))
     if by:
         return f"stopped by event {by}" + (f" at {_fmt_time(float(t_end))}" if t_end is not None else "")
     return f"end of the duration ({scene.get('duration', '?')})" + (

@@ -87,6 +87,12 @@ def _one_node(p):
     v.quadrature_weights[:] = weights
 
 
+def _unstabilised(p):
+    # the Baumgarte rate of every inextensible rod's length constraint set to 0 (tether/inextensible.py)
+    rods = ParamView(p).rods
+    rods.constraint_rate_1_s[:] = 0.0
+
+
 def _j2_sign(p):
     from .forces import zonal
 
@@ -326,6 +332,15 @@ MUTANTS = {
             ("deployment_retrieval_invariant", "deployment_frozen_negative_control"),
             mutate=_flag(L.DEFECT_REEL_FROZEN),
             path="reel",
+        ),
+        Mutant(
+            "inextensible_unstabilised",
+            "the inextensible rods' length constraints held at the acceleration level only (Baumgarte rate 0)",
+            "the rod records' constraint_rate_1_s (RT_CRATE), as build_model and prepare write them",
+            "docs/inextensible.md 4 (the drift of an unstabilised index-reduced constraint grows with time)",
+            ("inextensible_drift",),
+            mutate=_unstabilised,
+            path="inextensible",
         ),
     )
 }

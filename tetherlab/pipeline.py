@@ -15,6 +15,7 @@ import numpy as np
 
 from . import diagnostics as diag
 from . import initial
+from .initial import inextensible
 from .errors import SceneError
 from .forces import effect as effect_spec
 from .formulations.cowell import cowell_rhs
@@ -149,6 +150,7 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
             from_point_m=tuple(b_pt if graph.tethers[k].reversed else a_pt),
             to_point_m=tuple(a_pt if graph.tethers[k].reversed else b_pt),
             reversed=graph.tethers[k].reversed,
+            part="inextensible" if t.model == "inextensible" else "",
             reel=None if t.reel is None else ReelSpec(
                 t.reel.law, t.reel.exit, t.length_m, t.reel.speed_m_s, t.reel.rate_1_s, t.reel.rod_length_m,
                 t.mass_kg / t.length_m, t.length_m + t.reel.stored_length_m, _reel_table(t.reel),
@@ -171,11 +173,15 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
     # The relative equilibrium is a rigid rotation under the conservative effects; a velocity-
     # dependent or time-dependent force (electrodynamic, drag, third bodies) has none, so the
     # equilibrium is solved without them and they act from t = 0 (docs/scenes.md, orbit.motion).
+    # An inextensible tether's relative equilibrium is solved as the elastic one of its EA (the
+    # rods' strains are the unknowns there); its start then restores the lengths
+    # (tetherlab/initial/inextensible.py).
     eq_model = model
-    if any(not spec.conservative for spec, _ in effects):
+    inext = any(s.model == "inextensible" for s in specs)
+    if any(not spec.conservative for spec, _ in effects) or inext:
         eq_model = build_model(
             root_mass_kg=root.mass_kg,
-            tethers=specs,
+            tethers=[inextensible.elastic_stand_in(s) for s in specs],
             effects=[(spec, prm) for spec, prm in effects if spec.conservative],
             central=central,
             quadrature=nq,
@@ -228,6 +234,11 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
     else:
         period = float("nan")
     t_unit = math.sqrt(rr**3 / mu) if orbital else 1.0
+    if inextensible.has_inextensible(model):
+        inextensible.set_rates(model, tethers, t_unit)
+        if start is None and reel_phase is None:  # a continued run starts where the last one ended
+            y0 = inextensible.project(model, y0)
+        inextensible.check_taut(model, t0, y0, lambda name: f"tethers.{name}.initial")
     ref_len = rr if orbital else max(rr, max((t.length_m for t in tethers), default=1.0))
     atol = scene.integrator.atol * tolerance_scales(model, ref_len, t_unit)
     if scene.integrator.error_scale == "tether":
@@ -436,7 +447,17 @@ def run_outcome(prep: Prepared, res, p: np.ndarray, total_wall_s: float) -> tupl
     stopped = res.stopped_by
     stats["stopped_by"] = None if stopped is None else prep.event_names[stopped]
     message = res.message if res.status == 0 else failure_message(p, prep.model, res.status, res.t_end, res.message)
+    if res.status == 0 and stats["stopped_by"] and stats["stopped_by"].startswith("inextensible."):
+        message = inextensible_stop_text(stats["stopped_by"], res.t_end)
     return stats, message
+
+
+def inextensible_stop_text(event: str, t_s: float) -> str:
+    """Why a run with an inextensible tether stopped at its terminal tension event."""
+    _, tether, rod = event.split(".", 2)
+    return (f"run stopped at t = {t_s:.9g} s: the tension of {rod.replace('rod', 'rod ')} of tether {tether!r} reached "
+            "zero, where the inextensible model no longer holds (the rod would go slack); the outputs up to "
+            "there are kept. A slack tether needs model = 'paper' with tension_only = true")
 
 
 def event_record(name: str, t_s: float, side: int) -> dict:

@@ -80,6 +80,11 @@ def held_model(
     if not tether.tip_mass_kg > 0.0:
         raise ValueError(f"tether.tip_mass_kg: expected > 0 (an end mass to hold), got {tether.tip_mass_kg!r}")
     central = central or {"mu_m3_s2": 0.0, "radius_m": 0.0}
+    # an inextensible tether's static shape is the elastic one of its EA; the start then restores
+    # its rods' lengths (tetherlab/initial/inextensible.py)
+    from .initial.inextensible import elastic_stand_in
+
+    tether = elastic_stand_in(tether)
     hold = (applied_force.SPEC, {"body": 1.0, "fx": 0.0, "fy": 0.0, "fz": 0.0})
     return build_model(
         root_mass_kg=0.0,

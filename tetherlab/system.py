@@ -69,6 +69,8 @@ class TetherSpec:
     # a reel at A_1: length_m is then the deployed length at the model's start, the first rod
     # takes what the others (of reel.rod_length_m each) leave of it
     reel: ReelSpec | None = None
+    # model "inextensible" (part "inextensible"): Baumgarte rate of the rods' length constraints
+    constraint_rate_1_s: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -329,7 +331,8 @@ def build_model(
         tv.rod0 = g
         tv.tip_inv_mass_1_kg = 1.0 / t.tip_mass_kg if t.tip_mass_kg > 0 else 0.0
         tv.tip_mass_kg = t.tip_mass_kg
-        tv.model = {"paper": P.MODEL_PAPER, "energy": P.MODEL_ENERGY, "printed": P.MODEL_PRINTED}[t.model]
+        tv.model = {"paper": P.MODEL_PAPER, "energy": P.MODEL_ENERGY, "printed": P.MODEL_PRINTED,
+                    "inextensible": P.MODEL_INEXT}[t.model]
         tv.tension_only = 1.0 if t.tension_only else 0.0
         tv.parent = index[t.parent]
         tv.child = 1 + k if bodies[1 + k].name and bodies[1 + k].mass_kg > 0 else -1
@@ -351,6 +354,7 @@ def build_model(
             rv.ea_N = t.ea_n
             rv.damping_N_s = t.damping_n_s
             rv.tether = k
+            rv.constraint_rate_1_s = t.constraint_rate_1_s
             g += 1
 
     nodes, weights = gauss_legendre_halves(quadrature)

@@ -9,6 +9,9 @@ so no step ever straddles a kink.  Components, in this order (see :func:`event_c
 * one per rod of every ``tension_only`` tether: g = min(EA eps, EA eps + D eps').  The axial
   force max(0, EA eps + D eps') for eps > 0 (zero otherwise) switches exactly where g changes
   sign, so a tether going slack or snapping taut is a located event, not luck;
+* one per rod of every inextensible tether (terminal): its tension multiplier lambda
+  (tether/inextensible.py), from one evaluation of the right-hand side at (t, y).  The model
+  holds only while it is positive: the run stops where a rod would go slack;
 * with the Cowell formulation (header H_EV_WHEELS), per wheel with a ``max_torque`` the torque
   limit max_torque - |command| and per wheel with a ``max_speed`` the speed cut-off
   (bodies/wheels.py::limit_events): negative while the limit acts, so saturation entered and left
@@ -56,6 +59,11 @@ from .layout import (
     TT_ROD0,
     TT_SIZE,
     TT_TENSION_ONLY,
+    TT_MODEL,
+    MODEL_INEXT,
+    H_OFF_SCR,
+    SR_FE,
+    SR_SIZE,
 )
 
 SQ3 = math.sqrt(3.0)
@@ -95,13 +103,28 @@ def event_values(t, y, g_ptr, p):
                 el = min(el, el + damp * epsd)
             g_ptr[k] = el
             k += 1
-    if p[H_EV_WHEELS] != 0.0:
-        nw = int(p[H_NWHEEL])
+    inext = False
+    for tt in range(int(p[H_NTETH])):
+        if int(p[offt + tt * TT_SIZE + TT_MODEL]) == MODEL_INEXT:
+            inext = True
+    if p[H_EV_WHEELS] != 0.0 or inext:
         acc = np.empty(h)
         datt = np.empty(n - 2 * h)
         code = system_accelerations(t, y[:h], y[h : 2 * h], y[2 * h : n], p, acc, datt)
         if code != 0:
             return code
+    if inext:  # every rod's tension multiplier (tether/inextensible.py), terminal at zero
+        scr = int(p[H_OFF_SCR])
+        for tt in range(int(p[H_NTETH])):
+            tb = offt + tt * TT_SIZE
+            if int(p[tb + TT_MODEL]) != MODEL_INEXT:
+                continue
+            g0 = int(p[tb + TT_ROD0])
+            for g in range(g0, g0 + int(p[tb + TT_NRODS])):
+                g_ptr[k] = p[scr + g * SR_SIZE + SR_FE]
+                k += 1
+    if p[H_EV_WHEELS] != 0.0:
+        nw = int(p[H_NWHEEL])
         wscr = int(p[H_OFF_BSCR]) + int(p[H_NBODY]) * BS_SIZE + int(p[H_NTETH]) * TS_SIZE
         offw = int(p[H_OFF_WT])
         for j in range(nw):
@@ -134,6 +157,11 @@ def event_components(model, stop_radius_m: float = 0.0, wheel_limits: bool = Fal
             for i in range(sl.stop - sl.start):
                 names.append(f"slack.{t.name}.rod{i + 1}")
                 terminal.append(False)
+    for t, sl in zip(model.tethers, model.rod_slices):
+        if getattr(t, "model", "") == "inextensible":
+            for i in range(sl.stop - sl.start):
+                names.append(f"inextensible.{t.name}.rod{i + 1}")
+                terminal.append(True)
     if wheel_limits:
         for b in model.bodies:  # kernel body order, wheels in file order: the wheel table's order
             rig = getattr(b, "rigid", None)

@@ -47,6 +47,7 @@ FORM_COWELL_ORBIT = 4  # Cowell in a frame turning uniformly with the orbit (for
 MODEL_PAPER = 0    # published TMED equations (eq. 26 with the eq. 20 sign corrected)
 MODEL_ENERGY = 1   # energy-consistent variant (ideal joints, Lagrangian), docs/model.md
 MODEL_PRINTED = 2  # eq. 20 exactly as printed (wrong sign); for the evidence in docs/model.md only
+MODEL_INEXT = 3    # inextensible rods: lengths held by constraints, tensions multipliers (docs/inextensible.md)
 
 # -- failure codes (returned by the right-hand side, details in the header) ----------------------
 FAIL_NONE = 0

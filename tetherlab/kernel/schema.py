@@ -152,6 +152,8 @@ ROD = Record("rod", "RT_", 8, (
     _f("ea_N", "RT_EA", unit="N", doc="axial stiffness EA"),
     _f("damping_N_s", "RT_D", unit="N s", doc="damping D of T = EA*eps + D*deps/dt, paper eq. 1"),
     _i("tether", "RT_TETH", "tether index"),
+    _f("constraint_rate_1_s", "RT_CRATE", unit="1/s",
+       doc="inextensible tethers: Baumgarte rate a of its length constraint, phi'' + 2a phi' + a^2 phi = 0"),
 ))
 
 REEL = Record("reel", "RL_", 16, (

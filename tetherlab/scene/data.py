@@ -27,7 +27,8 @@ from ..orbits import kepler
 MAX_SANE_STRAIN = 0.05
 
 CENTER_OF_MASS = "center_of_mass"
-TETHER_MODELS = ("paper", "energy")
+TETHER_MODELS = ("paper", "energy", "inextensible")
+INEXTENSIBLE = "inextensible"  # rods of fixed length, tensions as multipliers (docs/inextensible.md)
 SHAPES = ("straight", "rods", "equilibrium")
 EQUILIBRIUM = "equilibrium"  # static shape between two placed ends (tetherlab.statics)
 SIDES = ("up", "down")
@@ -245,6 +246,9 @@ class Tether:
     from_point_m: Vector3 | None = None  # attachment on the rigid `from` body, body axes
     to_point_m: Vector3 | None = None
     reel: Reel | None = None  # a tether of varying length (docs/deployment.md)
+    # model "inextensible": the Baumgarte rate of the length constraints (None: the scene's
+    # reference rate, docs/inextensible.md section 4; 0: no stabilisation)
+    constraint_rate_1_s: float | None = None
 
 
 #: frames a spin axis may be written in

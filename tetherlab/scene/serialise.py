@@ -171,6 +171,8 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
                 entry["diameter"] = format_si(t.diameter_m, LENGTH)
             if t.tension_only:
                 entry["tension_only"] = True
+            if t.constraint_rate_1_s is not None:
+                entry["constraint_rate"] = format_si(t.constraint_rate_1_s, RATE)
             if t.from_point_m is not None:
                 entry["from_point"] = _vec(t.from_point_m, LENGTH)
             if t.to_point_m is not None:

@@ -19,11 +19,13 @@ from ..units import (
     LINEAR_DENSITY,
     MASS,
     MODULUS,
+    RATE,
     shown,
     to_si,
 )
 from .data import (
     EQUILIBRIUM,
+    INEXTENSIBLE,
     MAX_SANE_STRAIN,
     QUADRATURE_RANGE,
     SHAPES,
@@ -69,6 +71,7 @@ _TETHER_KEYS = (
     "from_point",
     "to_point",
     "reel",
+    "constraint_rate",
 )
 
 
@@ -144,11 +147,35 @@ def _parse_tethers(value: Any, bodies: tuple[Body, ...]) -> tuple[Tether, ...]:
             raise SceneError(f"{path}.tension_only", "true or false", f"{shown(tension_only)} ({type(tension_only).__name__})")
         from_point = _vector(table["from_point"], f"{path}.from_point", LENGTH) if "from_point" in table else None
         to_point = _vector(table["to_point"], f"{path}.to_point", LENGTH) if "to_point" in table else None
+        rate = _inextensible_keys(table, path, model, reel, tension_only, damping)
         tethers.append(
             Tether(name, start, end, rods, length, ea, mass, damping, model, quadrature, diameter, tension_only=tension_only,
-                   initial=initial, from_point_m=from_point, to_point_m=to_point, reel=reel)
+                   initial=initial, from_point_m=from_point, to_point_m=to_point, reel=reel, constraint_rate_1_s=rate)
         )
     return tuple(tethers)
+
+
+def _inextensible_keys(table, path: str, model: str, reel, tension_only: bool, damping: float) -> float | None:
+    """The constraint rate of an inextensible tether (None: the default), and the keys that an
+    inextensible tether cannot have, refused by name (docs/inextensible.md section 5)."""
+    if model != INEXTENSIBLE:
+        if "constraint_rate" in table:
+            raise SceneError(f"{path}.constraint_rate", "model = 'inextensible' with a constraint rate (only its "
+                             "length constraints have one)", f"model {model!r}")  # fmt: skip
+        return None
+    if tension_only:
+        raise SceneError(f"{path}.tension_only", "no tension_only with model = 'inextensible' (its rods cannot go "
+                         "slack: a tension reaching zero stops the run; use model = 'paper' for a slack tether)",
+                         "true")  # fmt: skip
+    if reel is not None:
+        raise SceneError(f"{path}.reel", "no reel with model = 'inextensible' (a reel pays out an elastic chain)",
+                         "a reel table")  # fmt: skip
+    if damping != 0.0:
+        raise SceneError(f"{path}.damping", "no axial damping with model = 'inextensible' (its rods do not stretch)",
+                         shown(table.get("damping")))  # fmt: skip
+    if "constraint_rate" not in table:
+        return None
+    return _quantity(table["constraint_rate"], f"{path}.constraint_rate", RATE, nonnegative=True)
 
 
 def _angles(value: Any, key: str, shape: str, rods: int) -> float | tuple[float, ...]:

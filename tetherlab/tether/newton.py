@@ -74,6 +74,7 @@ from ..kernel.layout import (
     BT_RIGID,
     BT_SIZE,
     TT_MODEL,
+    TT_PART,
     TT_PARENT,
     TT_CHILD,
     TT_PA,
@@ -155,6 +156,8 @@ def structure_supported(p, n_state, second_order):
             return f"root {i} (body {b}) has no position block of its own in q (offset {qo})"
     for k in range(nteth):
         tb = offt + k * TT_SIZE
+        if int(p[tb + TT_PART]) != 0:
+            return f"tether {k} is a part of kind {int(p[tb + TT_PART])} (tether/registry.py), which the structured matrix does not model"
         parent = int(p[tb + TT_PARENT])
         if parent < 0 or parent >= nbody or (parent > nteth and parent not in roots):
             return f"tether {k} hangs from body {parent}, neither a root nor a tether's tip"

@@ -8,7 +8,7 @@ with one registered part type each function below is a direct call into it, with
 per type (the first is the default).  The forest driver (tether/solve.py) and the diagnostics call
 only these.
 
-Part types: 0 chain (tether/chain.py).
+Part types: 0 chain (tether/chain.py), 1 inextensible (tether/inextensible.py).
 """
 
 from __future__ import annotations
@@ -21,6 +21,12 @@ from .chain import (
     back_substitute as _chain_back_substitute,
     share as _chain_share,
 )
+from .inextensible import (
+    walk as _inextensible_walk,
+    reduce as _inextensible_reduce,
+    back_substitute as _inextensible_back_substitute,
+    share as _inextensible_share,
+)
 
 
 @njit(cache=True, inline="always")
@@ -32,22 +38,35 @@ def tether_kind(p, i):
 def tether_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz):
     """Tether k from its attachment A_1 (ax.., avx..) to its end B_n, and (with_forces)
     its forces: (failure code, B_n position, velocity)."""
+    kind = tether_kind(p, k)
+    if kind == 1:
+        return _inextensible_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz)
     return _chain_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz)
 
 
 @njit(cache=True, inline="always")
 def tether_reduce(t, p, k):
     """Tether k eliminated down to A_1 (J_0 = W (s_0 + a_A)); returns a failure code."""
+    kind = tether_kind(p, k)
+    if kind == 1:
+        return _inextensible_reduce(t, p, k)
     return _chain_reduce(t, p, k)
 
 
 @njit(cache=True, inline="always")
 def tether_back_substitute(t, p, k, aax, aay, aaz, acc):
     """Tether k's accelerations once a_A is known; returns a failure code."""
+    kind = tether_kind(p, k)
+    if kind == 1:
+        return _inextensible_back_substitute(t, p, k, aax, aay, aaz, acc)
     return _chain_back_substitute(t, p, k, aax, aay, aaz, acc)
 
 
 @njit(cache=True, inline="always")
 def tether_share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh):
     """Tether k's energy and momentum share, from A_1's state."""
-    _chain_share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh)
+    kind = tether_kind(p, k)
+    if kind == 1:
+        _inextensible_share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh)
+    else:
+        _chain_share(t, q, qd, p, k, elastic, ax, ay, az, avx, avy, avz, sh)

@@ -32,6 +32,7 @@ INTERFACE = {
 # The first line is the default: a tether whose code matches no other line runs it.
 PARTS = (
     PartType(0, "chain", "chain"),
+    PartType(1, "inextensible", "inextensible"),
 )
 
 

@@ -28,7 +28,7 @@ SECTION_COST_S = {
     "study:deorbit": 170, "study:uncertainty_deorbit": 150, "study:rigid_bodies": 56, "controls": 55,
     "study:bead_vs_tmed": 50, "study:uncertainty": 25, "study:deployment": 8,
     "study:stiefel_table": 34, "study:rigid_scenes": 33, "figures": 20, "check:invariants": 13,
-    "check:vertical": 12, "check:hanging-chain": 15, "check:libration": 7, "check:reproducible": 5, "study:catenary": 5,
+    "check:vertical": 12, "check:hanging-chain": 15, "check:inextensible": 60, "check:libration": 7, "check:reproducible": 5, "study:catenary": 5,
 }
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .inextensible import check_inextensible
 from .checks import (
     check_de421,
     check_dop853,
@@ -22,6 +23,7 @@ CHECKS = [
     ("invariants", "Invariants: angular momentum, energy, power balance (docs/model.md 6)", check_invariants),
     ("lateral", "Two-rod lateral mode (docs/model.md 9)", check_lateral_mode),
     ("hanging-chain", "Hanging chain with a tip mass: lateral modes (docs/hanging-chain.md)", check_hanging_chain),
+    ("inextensible", "The inextensible tether model (docs/inextensible.md)", check_inextensible),
     ("gravity", "Gravity effects against heyoka (references/heyoka_orbits)", check_heyoka_orbits),
     ("de421", "DE421 Chebyshev fit (tetherlab/ephemeris.py)", check_de421),
     ("dop853", "DOP853 step-size control (Hairer, Norsett & Wanner II.4)", check_dop853),
@@ -58,6 +60,9 @@ _GATES_OF = {
     "invariants": ("angular_momentum_internal", "energy_model_energy", "energy_model_power_balance"),
     "lateral": ("lateral_mode_two_rods",),
     "hanging-chain": ("hanging_chain_lateral_modes",),
+    "inextensible": ("inextensible_rigid_chain", "inextensible_bessel_order", "inextensible_drift",
+                     "inextensible_drift_control", "inextensible_energy", "inextensible_ea_slope",
+                     "inextensible_libration"),
     "gravity": ("heyoka_orbits_position",),
     "de421": ("de421_fit_error",),
     "dop853": ("dop853_work_exponent",),
