@@ -308,7 +308,12 @@ def internal_angular_momentum_scale(model, y) -> float:
         )
         hw = sum((np.asarray(wh.axis) * y[model.wheel_index[(b, wh.name)]] for wh in rs.wheels), np.zeros(3))
         spin += float(np.linalg.norm(js @ w + hw))
-    for i in range(model.n_rods):
-        for s in (-1.0, 1.0):
-            items.append((0.5 * mr[i], pts["rG"][i] + s * pts["d"][i], pts["vG"][i] + s * pts["dd"][i]))
-    return spin + float(sum(m * np.linalg.norm(np.cross(r - rc, v - vc)) for m, r, v in items))
+    # every mass as rows of (m, r, v), in the order the sum always took them: the bodies, then
+    # each rod's two masses m/2 at r_G -/+ d
+    m = np.array([it[0] for it in items] + [0.5 * x for x in mr for _ in (0, 1)], float)
+    r = np.array([it[1] for it in items] + [pts["rG"][i] + s * pts["d"][i] for i in range(model.n_rods)
+                                            for s in (-1.0, 1.0)], float).reshape(-1, 3)  # fmt: skip
+    v = np.array([it[2] for it in items] + [pts["vG"][i] + s * pts["dd"][i] for i in range(model.n_rods)
+                                            for s in (-1.0, 1.0)], float).reshape(-1, 3)  # fmt: skip
+    terms = m * np.linalg.norm(np.cross(r - rc, v - vc), axis=1)
+    return spin + float(sum(terms.tolist()))

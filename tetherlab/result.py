@@ -40,6 +40,17 @@ def library_versions() -> dict:
     }
 
 
+def _frame(cols: dict) -> pd.DataFrame:
+    """The table of ``cols`` (name -> one value per row).  Float columns of one length are stacked
+    into one block first: a table of a few rows and hundreds of columns (each phase of a
+    deployment) is then built in one step instead of column by column, with the same values."""
+    vals = list(cols.values())
+    if vals and all(isinstance(v, np.ndarray) and v.dtype == np.float64 and v.ndim == 1 and v.shape == vals[0].shape
+                    for v in vals):  # fmt: skip
+        return pd.DataFrame(np.column_stack(vals), columns=list(cols))
+    return pd.DataFrame(cols)
+
+
 @dataclass
 class Result:
     timeseries: pd.DataFrame
@@ -124,7 +135,7 @@ class Result:
                 cols[f"{tet.name}.joint{j}.reaction_N"] = np.linalg.norm(jr[:, j, :], axis=1)
             g_rod += tet.rods
             g_joint += tet.rods + 1
-        ts = pd.DataFrame(cols)
+        ts = _frame(cols)
 
         g = d["global"]
         dcols = {
@@ -168,7 +179,7 @@ class Result:
                 dcols[f"{tet.name}.phi_rad"] = ph
             dcols["com_radius_m"] = np.linalg.norm(rc, axis=1)
             dcols.update(_orbital_columns(scene, model, np.asarray(t, float), rc, vc))
-        dg = pd.DataFrame(dcols)
+        dg = _frame(dcols)
         scene_dict = scene.to_dict() if hasattr(scene, "to_dict") else {}
         meta = {
             "versions": library_versions(),
