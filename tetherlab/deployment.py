@@ -157,27 +157,42 @@ def birth_state(lay_old, lay_new, y: np.ndarray, g0: int, l_m: float, la_m: floa
     return _with_rods(lay_old, lay_new, y, g0, 1, [(d_a, dd_a), (d - d_a, dd - dd_a)])
 
 
-def retire_state(model_old, lay_new, y: np.ndarray, k: int, rho_kg_m: float, la_m: float, lb_m: float,
-                 speed_m_s: float) -> np.ndarray:
+def retire_state(model_old, model_new, y: np.ndarray, k: int, rho_kg_m: float, la_m: float, lb_m: float,
+                 speed_m_s: float, t_s: float, angular: bool = True) -> np.ndarray:
     """The state after a retirement: the first rod of tether k (length la, at the reel) and the next
     (lb) merged into one rod of la + lb from the exit to the next's far end B.  Two rods become one
-    straight rod whose material moves with the field (2.1) of docs/deployment.md, so the momentum of
-    their material changes (the transport speed, l' (1 + eps) at the exit, spread over la + lb
-    instead of la) by dP; the velocity of B is changed by delta so that the merged rod and what
-    moves with B (the next rod's near end, or the end body) take -dP back: linear momentum is kept
-    to round-off, angular momentum and energy change (reported by the invariants; section 6.2)."""
+    straight rod whose material moves with the field (2.1) of docs/deployment.md, so the momentum
+    and angular momentum of their material change (the transport speed, l' (1 + eps) at the exit,
+    spread over la + lb instead of la; the kink straightened) and the centre of mass moves a little.
+    The merged state is then translated back to the centre of mass of before and given the rigid
+    velocity increment a + omega x (r - c) that restores both momenta: of all velocity changes that
+    do, the one that changes the kinetic energy least (docs/deployment.md 6.3;
+    tetherlab/momentum_remap.py).  Momentum and angular momentum are kept to round-off; the energy
+    changes (reported by the invariants).
+
+    ``angular=False``: the correction of linear momentum alone (the velocity of B changed by
+    delta so that the merged rod and what moves with B take -dP back; section 6.2): the negative
+    control of the angular-momentum gate only."""
+    from .momentum_remap import centre_of_mass, momenta, restore
     from .system import point_positions
 
     lay_old = model_old.state
+    lay_new = model_new.state
     g0 = model_old.rod_slices[k].start
     n = model_old.rod_slices[k].stop - g0
     d_a, d_b = y[lay_old.rod(g0)], y[lay_old.rod(g0 + 1)]
     dd_a, dd_b = y[lay_old.rod_rate(g0)], y[lay_old.rod_rate(g0 + 1)]
+    d, dd = d_a + d_b, dd_a + dd_b
+    if angular:
+        z = _with_rods(lay_old, lay_new, y, g0, 2, [(d, dd)])
+        before = momenta(model_old, t_s, y[None, :])[0]
+        c_old, _ = centre_of_mass(model_old, t_s, y)
+        z, _ = restore(model_new, t_s, z, before, c_old)
+        return z
     v_a = point_positions(model_old, y)["jvel"][k][0]
     k2 = 2 * SQ3
     m_a, m_b, m = rho_kg_m * la_m, rho_kg_m * lb_m, rho_kg_m * (la_m + lb_m)
     p_old = m_a * (v_a + k2 * dd_a / 2) + m_a * (speed_m_s / la_m) * k2 * d_a / 2 + m_b * (v_a + k2 * dd_a + k2 * dd_b / 2)
-    d, dd = d_a + d_b, dd_a + dd_b
     p_new = m * (v_a + k2 * dd / 2) + m * (speed_m_s / (la_m + lb_m)) * k2 * d / 2
     if n >= 3:  # the next rod's near end moves with B: half its mass
         beyond = rho_kg_m * lb_m / 2.0  # (every rod but the first is a full rod of lb)
@@ -227,10 +242,15 @@ def p_view(p):
     return ParamView(p)
 
 
-def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect: int = 0) -> DeploymentResult:
+def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect: int = 0,
+                  remap_defect: str | None = None) -> DeploymentResult:
     """Run a scene with reels phase by phase (module docstring).  A failed phase ends the run and
     keeps every output before it; a retrieval of the last rod stops it with the event
-    'reel.<tether>.retrieved'.  ``defect``: negative controls only (kernel/layout.py DEFECT_*)."""
+    'reel.<tether>.retrieved'.  ``defect``: negative controls only (kernel/layout.py DEFECT_*);
+    ``remap_defect``: the same for the Python remap ("linear-only": retirements restore the
+    linear momentum only, as before section 6.3 of docs/deployment.md)."""
+    if remap_defect not in (None, "linear-only"):
+        raise ValueError(f"remap_defect: expected None or 'linear-only'; got {remap_defect!r}")
     from .pipeline import SimulationError, _ProgressBar, prepare, run_outcome, run_segments, segment_plan
     from .result import Result
     from .tether.reel_diagnostics import REEL_COLUMNS
@@ -325,7 +345,8 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
         else:
             k = [x.name for x in prep.model.tethers].index(t.name)
             rho = t.mass_kg / t.length_m
-            y = retire_state(prep.model, lay_new, y_end, k, rho, l_first, reel.rod_length_m, speed)
+            y = retire_state(prep.model, nxt_prep.model, y_end, k, rho, l_first, reel.rod_length_m, speed, t_b,
+                             angular=remap_defect != "linear-only")
         changes.append({"t_s": t_b, "reel": t.name, "change": nxt[1], "rods": n_new})
         prep = nxt_prep
         t_a = t_b

@@ -41,6 +41,7 @@ from ..kernel.layout import (
     FORM_COWELL_ORBIT,
     H_FORM,
     H_LEN,
+    H_NREEL,
     H_NRODS,
     H_NQT,
     H_NSTATE,
@@ -85,6 +86,7 @@ from ..kernel.layout import (
     TT_TENSION_ONLY,
     TT_TIP_M,
 )
+from .reel import reel_update
 from .rod import strain
 
 SQ3 = math.sqrt(3.0)
@@ -282,6 +284,19 @@ def rod_blocks(y, p, m1, blk):
                             damp / lu) * u[a] * w[c]  # fmt: skip
                         b[B_KV + 3 * a + c] = (damp / lu) * uu
     return 0
+
+
+@njit(cache=True)
+def form_blocks(t, y, p, m1, blk):
+    """:func:`rod_blocks` at the time t of the state y.  RADAU5 forms the matrix at a state of its
+    own (the middle of the coming step, on the extrapolated polynomial), not at the last rhs
+    evaluation, so a reel's first rod must first be set to its length and mass at t
+    (reel_update, as the rhs does): its strain eps = |D|/l - 1 against the length of another
+    time is off by l' dt/l, which on a light line is many times the true strain, and the
+    geometric stiffness fe/l made of it is then wrong by as much (docs/deployment.md 8b)."""
+    if int(p[H_NREEL]) > 0 and reel_update(t, p) != 0:
+        return 1
+    return rod_blocks(y, p, m1, blk)
 
 
 #: offset of the frame's angular velocity in the cowell-orbit block (formulations/cowell_orbit.OP_W;

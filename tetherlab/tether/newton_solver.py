@@ -38,7 +38,7 @@ AUTO_BORDERED_MIN_RODS = 32
 @cfunc(FORM_SIG, cache=True)
 def _form(t, y_ptr, p_ptr, m1, blk_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
-    return _nw.rod_blocks(carray(y_ptr, (2 * m1,)), p, m1, carray(blk_ptr, (int(p[H_NRODS]), _nw.BLK_SIZE)))
+    return _nw.form_blocks(t, carray(y_ptr, (2 * m1,)), p, m1, carray(blk_ptr, (int(p[H_NRODS]), _nw.BLK_SIZE)))
 
 
 @cfunc(FACTOR_REAL_SIG, cache=True)

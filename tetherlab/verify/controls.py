@@ -229,6 +229,9 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         ("deployment_no_ldot_negative_control", "reel_strain_rate_without_ldot",
          ("deployment_exponential_angle_over_budget", "deployment_exponential_tension_over_budget")),
         ("deployment_frozen_negative_control", "reel_law_frozen", ("deployment_retrieval_invariant",)),
+        # (the remap is Python: deployment.retire_state's P-only correction, run by the study itself)
+        ("deployment_retirement_linear_only_negative_control", "retire_remap_linear_only",
+         ("deployment_retirement_angmom_over_bound",)),
     ):  # fmt: skip
         ctrl = study_values.get(ctrl_gate)
         if ctrl is not None and ctrl <= gates[ctrl_gate]["threshold"]:

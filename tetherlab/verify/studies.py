@@ -166,6 +166,8 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_energy_over_bound": g.get("deployment_energy_over_bound"),
         "deployment_birth_remap": g.get("deployment_birth_remap"),
         "deployment_retirement_momentum_over_bound": g.get("deployment_retirement_momentum_over_bound"),
+        "deployment_retirement_angmom_over_bound": g.get("deployment_retirement_angmom_over_bound"),
+        "deployment_retirement_linear_only_negative_control": g.get("deployment_retirement_linear_only_negative_control"),
         "deployment_exponential_angle_over_budget": g.get("deployment_exponential_angle_over_budget"),
         "deployment_exponential_tension_over_budget": g.get("deployment_exponential_tension_over_budget"),
         "deployment_retrieval_invariant": g.get("deployment_retrieval_invariant"),
