@@ -30,6 +30,10 @@ E. Exponential deployment l = l0 exp(c Omega t), c = 0.2, on a 42164 km circular
 F. Slow retrieval (adiabatic invariant): 10 km hauled in at l'/l = -0.02 Omega for 5 orbits on a
    7000 km orbit, libration started 5 deg off the steady angle: A l / (A0 l0) stays 1 within 0.021
    (|c|/sqrt3 + A^2/8 + 4 l/a). Control: a kernel that ignores the law (DEFECT_REEL_FROZEN).
+G. A spinning rigid hub with a wheel pays out from a reel off its centre of mass under three laws
+   (studies/deployment_hub.py): total angular momentum (hub, wheel, stored tether and spool, rods)
+   within 100 rtol |H(0)|, momentum and E + W_exit as above; what the attitude does in a figure.
+   Control: the moment of the exit's momentum flux dropped (DEFECT_REEL_NO_EXIT_TORQUE).
 
     PYTHONPATH=. python studies/deployment.py OUTDIR [--quiet]
 """
@@ -53,6 +57,8 @@ from tetherlab.deployment import _rows, birth_state, simulate_reel  # noqa: E402
 from tetherlab.model.params import DEFECT_REEL_FROZEN, DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED  # noqa: E402
 from tetherlab.pipeline import prepare  # noqa: E402
 from tetherlab.scene import Scene  # noqa: E402
+
+from studies.deployment_hub import hub_figure, part_hub  # noqa: E402
 
 EPS = float(np.finfo(float).eps)
 MU = 3.986004418e14  # m^3/s^2, the scene preset "earth" (tetherlab/scene/data.py)
@@ -450,6 +456,15 @@ def _later_figures(out: Path, expo, retr, plt) -> list[str]:
     return names
 
 
+def hub_figures(out: Path, hub) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return hub_figure(out, hub, plt)
+
+
 def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) -> None:
     from tetherlab.report import table
 
@@ -489,7 +504,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir", type=Path)
     ap.add_argument("--quiet", action="store_true")
-    ap.add_argument("--parts", default="ABCDEF", help="parts to run (A and C run together)")
+    ap.add_argument("--parts", default="ABCDEFG", help="parts to run (A and C run together)")
     args = ap.parse_args(argv)
     out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
@@ -522,6 +537,8 @@ def main(argv=None) -> int:
         run_part("E", part_exponential)
     if "F" in args.parts:
         run_part("F", part_retrieval)
+    if "G" in args.parts:
+        run_part("G", part_hub)
     free = found.get("A+C")
     if free is not None:
         # the L/N control's weakest failure over A, C and D (measured / bound): the gate reads
@@ -529,6 +546,7 @@ def main(argv=None) -> int:
         control = min(free["control"], found["D"]) if found.get("D") is not None else free["control"]
         gates["deployment_rescaled_negative_control"] = 1.0 / control if control > 0 else math.inf
     figs = figures(out, free, found.get("E"), found.get("F"))
+    figs += hub_figures(out, found.get("G"))
     summary = {"gates": gates, "failures": failures, "wall_s": walls}
     (out / "deployment_summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     write_report(out, rows, gates, figs, walls)

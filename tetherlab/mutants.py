@@ -327,6 +327,15 @@ MUTANTS = {
             mutate=_flag(L.DEFECT_REEL_FROZEN),
             path="reel",
         ),
+        Mutant(
+            "reel_hub_exit_torque_dropped",
+            "a reel on a rigid body without the moment e x rho L'^2 (1 + eps) u of the exit's momentum flux",
+            "tether/reel_hub.py (p[H_MUTANT] = DEFECT_REEL_NO_EXIT_TORQUE)",
+            "docs/deployment.md 9.2 (the angular momentum balance of the hub with its stored tether)",
+            ("deployment_hub_angular_momentum_over_bound", "deployment_hub_exit_torque_negative_control"),
+            mutate=_flag(L.DEFECT_REEL_NO_EXIT_TORQUE),
+            path="reel",
+        ),
     )
 }
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from .._jit import njit
 from ..kernel.layout import (
+    BS_A,
     BS_F,
     BS_M,
     BS_R,
@@ -166,8 +167,10 @@ def reel_hub_share(p, i):
     """What reel i's stored tether adds to its rigid body's share (which counts m v_O and the dry
     J_s omega): momentum omega x m_s e; angular momentum about the origin r_O x (omega x m_s e) +
     m_s e x v_O + J_st omega + h_d; kinetic energy m_s v_O.(omega x e) + omega.J_st omega/2 and,
-    for a drum, omega.h_d + m_s L'^2/2; and the power the reel puts into the hub carrying the material
-from the ring to the exit, m' omega.K_ring omega/2 (docs/deployment.md 9.3).  Returns the 8 numbers."""
+    for a drum, omega.h_d + m_s L'^2/2; and the power the reel puts into the system besides the exit's
+(docs/deployment.md 9.3): carrying the material from the ring to the exit at its centre,
+m' omega.K_ring omega/2, and for a drum its motor's work on the turns, alpha.h_d - rho L'^3/2 +
+m_s L' L'' (the body's accelerations already solved).  Returns the 8 numbers."""
     rb = int(p[H_OFF_REEL]) + i * RL_SIZE
     rs = int(p[H_OFF_RSCR]) + i * RS_SIZE
     bs = int(p[H_OFF_BSCR]) + int(p[rb + RL_BODY]) * BS_SIZE
@@ -193,4 +196,11 @@ from the ring to the exit, m' omega.K_ring omega/2 (docs/deployment.md 9.3).  Re
     # ring term of the torque, m' omega.K_ring omega, less the ring's kinetic energy it leaves with)
     aw = ax * wx + ay * wy + az * wz
     ring = 0.25 * md * rsp * rsp * (wx * wx + wy * wy + wz * wz + aw * aw)
+    if int(p[rb + RL_EXIT]) == REEL_EXIT_DRUM:
+        # and the work of the drum's motor or brake on the turns it spins: d/dt(omega.h_d + m_s L'^2/2)
+        # less the work its reaction does on the hub, -omega.h_d' (docs/deployment.md 9.3)
+        ld = p[rs + RS_LD]
+        rho = p[rb + RL_RHO]
+        A = bs + BS_A
+        ring += p[A + 3] * hx + p[A + 4] * hy + p[A + 5] * hz - 0.5 * rho * ld * ld * ld + ms * ld * p[rs + RS_LDD]
     return px, py, pz, ax_ + bx + jx + hx, ay_ + by + jy + hy, az_ + bz + jz + hz, ke, ring
