@@ -144,7 +144,8 @@ def _parse_tethers(value: Any, bodies: tuple[Body, ...]) -> tuple[Tether, ...]:
             raise SceneError(f"{path}.tension_only", "true or false", f"{shown(tension_only)} ({type(tension_only).__name__})")
         from_point = _vector(table["from_point"], f"{path}.from_point", LENGTH) if "from_point" in table else None
         to_point = _vector(table["to_point"], f"{path}.to_point", LENGTH) if "to_point" in table else None
-        if reel is not None and reel.point_m is not None:  # the reel's exit is the tether's attachment
+        rigid_start = any(b.name == start and b.rigid is not None for b in bodies)
+        if reel is not None and reel.point_m is not None and rigid_start:  # the reel's exit is the attachment
             if from_point is None:
                 from_point = reel.point_m
             elif any(abs(a - b) > 1e-12 * max(1.0, abs(b)) for a, b in zip(from_point, reel.point_m)):
