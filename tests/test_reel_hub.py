@@ -197,3 +197,20 @@ def test_hub_keys_on_a_point_mass_reel_are_refused():
     with pytest.raises(SceneError) as e:
         Scene.from_dict(d)
     assert e.value.key == "tethers.main.reel.point" and "point mass" in str(e.value)
+
+
+def test_a_hub_that_hangs_from_another_tether_keeps_angular_momentum():
+    # the hub is a child (its parent tether's end body, eliminated into the root's system through
+    # its compliance with the stored tether's coupled 6x6 matrix): a 50 kg root holds it by a 39 m
+    # line at (-1, 0, 0) m in body axes while it pays out from its reel; bound and control as above
+    d = _short().to_dict()
+    d["bodies"] = {"m0": {"mass": "50 kg", "position": ["-40 m", "0 m", "0 m"], "velocity": ["0 m/s", "-2 m/s", "0 m/s"]},
+                   **d["bodies"]}  # fmt: skip
+    d["tethers"] = {"hold": {"from": "m0", "to": "hub", "length": "39 m", "EA": "5e3 N", "linear_density": "0.01 kg/m",
+                             "rods": 2, "model": "energy", "to_point": ["-1 m", "0 m", "0 m"]}, **d["tethers"]}  # fmt: skip
+    for defect, fails in ((0, False), (DEFECT_REEL_NO_EXIT_TORQUE, True)):
+        run = simulate_reel(Scene.from_dict(d), defect=defect, raise_on_failure=False)
+        assert run.ok and len(run.changes) == 2, run.message
+        H = _HUB._vec(run.invariants, "H")
+        h_err, h_bound = float(np.abs(H - H[0]).max()), 100.0 * RTOL * float(np.linalg.norm(H[0]))
+        assert (h_err > h_bound) == fails, (defect, h_err, h_bound)
