@@ -480,14 +480,18 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "plus the work taken out at the exit constant up to the quadrature of that work. Parts E and F "
         "check the classic results: an exponential deployment settles at the angle sin 2 theta = -4c/3 "
         "with the Modi & Misra tension, and under slow retrieval the libration amplitude grows as 1/l "
-        "(the adiabatic invariant).",
+        "(the adiabatic invariant). Part G pays out from a reel on a spinning rigid hub with a wheel, "
+        "the stored tether a spool in the hub's mass, centre of mass and inertia (docs/deployment.md 9): "
+        "the total angular momentum, momentum and energy balance under three laws, and what the hub's "
+        "attitude does.",
         "",
         "**What the numbers mean.** 'over bound' is the measured error divided by its budget "
         "(docs/deployment.md 8; references/gates.toml gives each budget and its source): below 1 passes. "
         "The controls are the same runs with a deliberate defect of the reel kernel; each must exceed its "
         "bound, and the report's gate for a control is bound / measured (below 1: the control failed the "
         "gate, as it must). The peers' fixed-segment scaling l0 = L/N conserves neither momentum nor "
-        "energy; the strain rate without the l' term brakes the deployment; a kernel ignoring the law "
+        "energy; on the hub, the exit flux's moment dropped breaks the angular momentum and the "
+        "centripetal term dropped the momentum and energy; the strain rate without the l' term brakes the deployment; a kernel ignoring the law "
         "leaves A l unconserved. The birth remap (B) has no control: it is Python (deployment.birth_state), "
         "which no defect of the kernel reaches.",
         "",
