@@ -12,6 +12,14 @@ must stay within the integrator's error, 100 rtol |H(0)| (a quadratic invariant;
 8), the linear momentum within 100 rtol sqrt(2 M K_max) (nonlinear in the state on a rigid hub: the
 stored mass off the centre of mass moves with omega x m_s e), and E + W_exit (the exit's and the
 reel's work, docs/deployment.md 9.3) constant to its quadrature's Richardson estimate, as part C.
+On the spin axis the spool's inertia has a closed form: a hub spinning about its axis of largest
+inertia pays the line out along that axis from a reel on it (exit and spool centred on the axis,
+the ring about it), so the line, the end mass and the flux carry no angular momentum about the axis
+and exert no torque about it; the hub with its stored turns keeps (J_zz + m_s R_s^2) omega_z, and
+omega_z(t) = omega_0 (J_zz + m_s(0) R_s^2) / (J_zz + m_s(t) R_s^2): the hub spins up as the spool
+empties (docs/deployment.md 9.2, the ring's term).  Bound: 100 rtol omega_0 (the integrator's
+error); control: the ring's term dropped (DEFECT_REEL_NO_RING), omega_z then stays omega_0.
+
 Controls: the constant-law run without the moment of the exit's momentum flux,
 e x rho L'^2 (1 + eps) u (DEFECT_REEL_NO_EXIT_TORQUE), must fail the angular momentum bound;
 without the centripetal term omega x (omega x e) of the exit point and the stored mass
@@ -25,7 +33,7 @@ import math
 import numpy as np
 
 from tetherlab.deployment import simulate_reel
-from tetherlab.model.params import DEFECT_NO_CENTRIPETAL, DEFECT_REEL_NO_EXIT_TORQUE
+from tetherlab.model.params import DEFECT_NO_CENTRIPETAL, DEFECT_REEL_NO_EXIT_TORQUE, DEFECT_REEL_NO_RING
 from tetherlab.scene import Scene
 
 HUB_RTOL = 1e-11
@@ -104,6 +112,65 @@ def rigid_spin_estimate(H_z, L):
     return H_z / i_z
 
 
+AXIS_SPIN_RAD_S, AXIS_STORED_M, AXIS_SPOOL_R, AXIS_SPEED = 0.5, 10000.0, 0.5, 5.0  # rad/s, m, m, m/s
+
+
+def axis_scene(count=121):
+    """The on-axis spin-up: the hub of hub_scene spinning at 0.5 rad/s about z pays out 10 km stored
+    on a ring of 0.5 m (100 kg: m_s R_s^2 = 25 kg m^2 against J_zz = 60) at 5 m/s for 120 s along
+    +z from (0, 0, 1) m, to a 10 kg end mass on the axis at rest."""
+    reel = {"law": "constant", "speed": f"{AXIS_SPEED} m/s", "rod_length": "50 m", "stored_length": f"{AXIS_STORED_M} m",
+            "point": ["0 m", "0 m", "1 m"], "exit_direction": [0, 0, 1], "spool_radius": f"{AXIS_SPOOL_R} m"}  # fmt: skip
+    return Scene.from_dict({
+        "name": "hub-axis-spin-up", "duration": "120 s", "effects": {},
+        "bodies": {
+            "hub": {"mass": f"{HUB_KG} kg", "position": ["0 m", "0 m", "0 m"], "velocity": ["0 m/s", "0 m/s", "0 m/s"],
+                    "rigid": {"inertia": {"xx": "40 kg m2", "yy": "50 kg m2", "zz": f"{J_ZZ} kg m2"},
+                              "attitude": {"quaternion": [1.0, 0.0, 0.0, 0.0]},
+                              "angular_velocity": {"vector": ["0 rad/s", "0 rad/s", f"{AXIS_SPIN_RAD_S} rad/s"],
+                                                   "frame": "body"}}},
+            "mf": {"mass": f"{END_KG} kg", "position": ["0 m", "0 m", "151 m"], "velocity": ["0 m/s", "0 m/s", "0 m/s"]}},
+        "tethers": {"main": {"from": "hub", "to": "mf", "length": "150 m", "EA": "2e3 N",
+                             "linear_density": f"{RHO_KG_M} kg/m", "model": "energy", "reel": reel}},
+        "integrator": {"method": "dop853", "rtol": HUB_RTOL, "atol": 1e-11},
+        "output": {"count": count},
+    })  # fmt: skip
+
+
+def axis_spin_closed_form(t_s):
+    """omega_z(t) = omega_0 (J_zz + m_s(0) R_s^2) / (J_zz + m_s(t) R_s^2), m_s = rho (stored - v t)."""
+    ms = RHO_KG_M * (AXIS_STORED_M - AXIS_SPEED * np.asarray(t_s))
+    ms0 = RHO_KG_M * AXIS_STORED_M
+    r2 = AXIS_SPOOL_R**2
+    return AXIS_SPIN_RAD_S * (J_ZZ + ms0 * r2) / (J_ZZ + ms * r2)
+
+
+def axis_errors(run):
+    """t, omega_z and its largest error against the closed form."""
+    t, w, _ = hub_timeseries(run)
+    return t, w[:, 2], float(np.abs(w[:, 2] - axis_spin_closed_form(t)).max())
+
+
+def part_axis():
+    run = simulate_reel(axis_scene())
+    ctrl = simulate_reel(axis_scene(), defect=DEFECT_REEL_NO_RING, raise_on_failure=False)
+    if not run.ok:
+        raise RuntimeError(f"part G (on-axis): {run.message}")
+    t, w, err = axis_errors(run)
+    _, _, c_err = axis_errors(ctrl)
+    bound = 100.0 * HUB_RTOL * AXIS_SPIN_RAD_S
+    rise = float(axis_spin_closed_form(t[-1]) / AXIS_SPIN_RAD_S - 1.0)
+    rows = [
+        {"case": "G on-axis spin-up: |omega_z - closed form|", "value": err, "bound": bound, "over bound": err / bound,
+         "unit": "rad/s", "note": f"{len(run.changes)} births; the closed form rises {rise:.3%} over the run"},
+        {"case": "control: the ring's term dropped, on-axis spin-up", "value": c_err, "bound": bound,
+         "over bound": c_err / bound, "unit": "rad/s", "note": "must exceed its bound"},
+    ]  # fmt: skip
+    gates = {"deployment_hub_axis_spin_over_bound": err / bound,
+             "deployment_hub_ring_negative_control": bound / c_err if c_err > 0 else math.inf}
+    return rows, gates, {"t": t, "w": w, "ctrl": axis_errors(ctrl)[:2]}
+
+
 def part_hub():
     """G: the three laws, their bounds, the energy balance and the exit-torque control."""
     cases = (("constant", "canister"), ("exponential", "drum"), ("table", "canister"))
@@ -161,7 +228,10 @@ def part_hub():
         # bound / measured of the control's weakest failure: below 1 when it failed every gate it must
         "deployment_hub_centripetal_negative_control": 1.0 / weakest if weakest > 0 else math.inf,
     }
-    return rows, gates, {"runs": runs, "ctrl": ctrl, "h_bound": hc_bound}
+    a_rows, a_gates, axis = part_axis()
+    rows += a_rows
+    gates.update(a_gates)
+    return rows, gates, {"runs": runs, "ctrl": ctrl, "h_bound": hc_bound, "axis": axis}
 
 
 def hub_figure(out, hub, plt) -> list[str]:
@@ -169,7 +239,7 @@ def hub_figure(out, hub, plt) -> list[str]:
     rates), and the angular momentum error of each law and of the control against the bound."""
     if hub is None:
         return []
-    fig, axes = plt.subplots(1, 3, figsize=(18, 4.4))
+    fig, axes = plt.subplots(1, 4, figsize=(24, 4.4))
     for k, ((law, exit_), run) in enumerate(hub["runs"].items()):
         t, w, L = hub_timeseries(run)
         H = _vec(run.invariants.drop_duplicates("t_s"), "H")
@@ -190,6 +260,14 @@ def hub_figure(out, hub, plt) -> list[str]:
     axes[1].set_ylabel("rad/s (body axes)")
     axes[2].set_title("G: total angular momentum error")
     axes[2].set_ylabel("|H(t) - H(0)| (kg m^2/s)")
+    ax = axes[3]
+    axis = hub["axis"]
+    ax.plot(axis["t"], axis["w"], "C0-", label="omega_z, the model")
+    ax.plot(axis["t"], axis_spin_closed_form(axis["t"]), "k--", lw=1,
+            label="closed form omega_0 (J + m_s(0) R_s^2) / (J + m_s(t) R_s^2)")
+    ax.plot(axis["ctrl"][0], axis["ctrl"][1], "C3:", label="control: the ring's term dropped")
+    ax.set_title("G: on-axis spin-up as the spool empties")
+    ax.set_ylabel("rad/s")
     for ax in axes:
         ax.set_xlabel("t (s)")
         ax.legend(fontsize=8)

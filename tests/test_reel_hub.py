@@ -16,7 +16,7 @@ import pytest
 
 from tetherlab.deployment import simulate_reel
 from tetherlab.errors import SceneError
-from tetherlab.model.params import DEFECT_NO_CENTRIPETAL, DEFECT_REEL_NO_EXIT_TORQUE, ParamView
+from tetherlab.model.params import DEFECT_NO_CENTRIPETAL, DEFECT_REEL_NO_EXIT_TORQUE, DEFECT_REEL_NO_RING, ParamView
 from tetherlab.pipeline import prepare
 from tetherlab.scene import Scene
 from tetherlab.tether.reel_hub import reel_hub_share
@@ -226,3 +226,14 @@ def test_radau5_with_its_structured_newton_matrix_keeps_the_hub_balances():
     assert run.ok, run.message
     H = _HUB._vec(run.invariants, "H")
     assert float(np.abs(H - H[0]).max()) <= 100.0 * 1e-9 * float(np.linalg.norm(H[0]))
+
+
+def test_on_axis_the_hub_spins_up_as_the_spool_empties():
+    # docs/deployment.md 9.4: omega_z = omega_0 (J + m_s(0) R_s^2)/(J + m_s(t) R_s^2) on the axis (the
+    # ring's term of eq. 9.3; the line, the end mass and the flux have no moment about z); bound the
+    # integrator's error 100 rtol omega_0; control: the ring's term dropped (omega_z stays omega_0)
+    bound = 100.0 * RTOL * _HUB.AXIS_SPIN_RAD_S
+    _, _, err = _HUB.axis_errors(simulate_reel(_HUB.axis_scene(count=31)))
+    assert err <= bound, (err, bound)
+    _, _, c_err = _HUB.axis_errors(simulate_reel(_HUB.axis_scene(count=31), defect=DEFECT_REEL_NO_RING))
+    assert c_err > bound, (c_err, bound)

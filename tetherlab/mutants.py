@@ -336,6 +336,16 @@ MUTANTS = {
             mutate=_flag(L.DEFECT_REEL_NO_EXIT_TORQUE),
             path="reel",
         ),
+        Mutant(
+            "reel_hub_ring_dropped",
+            "a reel on a rigid body without the ring's angular momentum m' (R_s^2/2)(omega + a (a.omega)) that the "
+            "material leaves in the body on its way from the spool's rim to the exit",
+            "tether/reel_hub.py (p[H_MUTANT] = DEFECT_REEL_NO_RING)",
+            "docs/deployment.md 9.2, eq. 9.3 (the on-axis spin-up's closed form)",
+            ("deployment_hub_axis_spin_over_bound", "deployment_hub_ring_negative_control"),
+            mutate=_flag(L.DEFECT_REEL_NO_RING),
+            path="reel",
+        ),
     )
 }
 

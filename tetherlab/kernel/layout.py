@@ -35,6 +35,7 @@ DEFECT_REEL_RESCALED = 23         # a reel's tether as the peers pay it out: n f
 DEFECT_REEL_NO_LDOT = 24          # the strain rate of the rod at a reel without its l' term (tether/reel.py)
 DEFECT_REEL_FROZEN = 25           # the kernel ignores the reel's law: L stays L0 (tether/reel.py)
 DEFECT_REEL_NO_EXIT_TORQUE = 26   # a reel on a rigid body without the torque of the exit's momentum flux (tether/reel_hub.py)
+DEFECT_REEL_NO_RING = 27          # a reel on a rigid body without the ring's angular momentum left in the body (tether/reel_hub.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 

@@ -34,6 +34,7 @@ from ..kernel.layout import (
     BS_V,
     BS_W,
     DEFECT_REEL_NO_EXIT_TORQUE,
+    DEFECT_REEL_NO_RING,
     H_MUTANT,
     H_NBODY,
     H_OFF_BSCR,
@@ -148,6 +149,8 @@ def reel_hub_terms(p, i, jump, ux, uy, uz):
     jx, jy, jz = _stored_inertia_times(ms, ex, ey, ez, ax, ay, az, rsp, wx, wy, wz)
     gx, gy, gz = cross(wx, wy, wz, jx + hx, jy + hy, jz + hz)
     r2 = 0.5 * md * rsp * rsp
+    if int(p[H_MUTANT]) == DEFECT_REEL_NO_RING:  # the negative control of the on-axis spin-up
+        r2 = 0.0
     aw = ax * wx + ay * wy + az * wz
     tx = -gx - hdx + r2 * (wx + ax * aw)
     ty = -gy - hdy + r2 * (wy + ay * aw)

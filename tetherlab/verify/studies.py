@@ -178,6 +178,8 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_hub_energy_over_bound": g.get("deployment_hub_energy_over_bound"),
         "deployment_hub_exit_torque_negative_control": g.get("deployment_hub_exit_torque_negative_control"),
         "deployment_hub_centripetal_negative_control": g.get("deployment_hub_centripetal_negative_control"),
+        "deployment_hub_axis_spin_over_bound": g.get("deployment_hub_axis_spin_over_bound"),
+        "deployment_hub_ring_negative_control": g.get("deployment_hub_ring_negative_control"),
     }
 
 
