@@ -33,6 +33,12 @@ E. Exponential deployment l = l0 exp(c Omega t), c = 0.2, on a 42164 km circular
 F. Slow retrieval (adiabatic invariant): 10 km hauled in at l'/l = -0.02 Omega for 5 orbits on a
    7000 km orbit, libration started 5 deg off the steady angle: A l / (A0 l0) stays 1 within 0.021
    (|c|/sqrt3 + A^2/8 + 4 l/a). Control: a kernel that ignores the law (DEFECT_REEL_FROZEN).
+G. Rod-count convergence of a deployment (nominal rod length halved) and the birth bounds varied
+   (docs/deployment.md 8c): measured and reported, not gated.
+H. A spinning rigid hub with a wheel pays out from a reel off its centre of mass under three laws
+   (studies/deployment_hub.py): total angular momentum (hub, wheel, stored tether and spool, rods)
+   within 100 rtol |H(0)|, momentum and E + W_exit as above; what the attitude does in a figure.
+   Control: the moment of the exit's momentum flux dropped (DEFECT_REEL_NO_EXIT_TORQUE).
 
     PYTHONPATH=. python studies/deployment.py OUTDIR [--quiet]
 """
@@ -56,6 +62,8 @@ from tetherlab.deployment import _rows, birth_state, simulate_reel  # noqa: E402
 from tetherlab.model.params import DEFECT_REEL_FROZEN, DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED  # noqa: E402
 from tetherlab.pipeline import prepare  # noqa: E402
 from tetherlab.scene import Scene  # noqa: E402
+
+from studies.deployment_hub import hub_figure, part_hub  # noqa: E402
 
 EPS = float(np.finfo(float).eps)
 MU = 3.986004418e14  # m^3/s^2, the scene preset "earth" (tetherlab/scene/data.py)
@@ -586,6 +594,15 @@ def _later_figures(out: Path, expo, retr, plt) -> list[str]:
     return names
 
 
+def hub_figures(out: Path, hub) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return hub_figure(out, hub, plt)
+
+
 def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) -> None:
     from tetherlab.report import table
 
@@ -601,14 +618,18 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "plus the work taken out at the exit constant up to the quadrature of that work. Parts E and F "
         "check the classic results: an exponential deployment settles at the angle sin 2 theta = -4c/3 "
         "with the Modi & Misra tension, and under slow retrieval the libration amplitude grows as 1/l "
-        "(the adiabatic invariant).",
+        "(the adiabatic invariant). Part H pays out from a reel on a spinning rigid hub with a wheel, "
+        "the stored tether a spool in the hub's mass, centre of mass and inertia (docs/deployment.md 9): "
+        "the total angular momentum, momentum and energy balance under three laws, and what the hub's "
+        "attitude does.",
         "",
         "**What the numbers mean.** 'over bound' is the measured error divided by its budget "
         "(docs/deployment.md 8; references/gates.toml gives each budget and its source): below 1 passes. "
         "The controls are the same runs with a deliberate defect of the reel kernel; each must exceed its "
         "bound, and the report's gate for a control is bound / measured (below 1: the control failed the "
         "gate, as it must). The peers' fixed-segment scaling l0 = L/N conserves neither momentum nor "
-        "energy; the strain rate without the l' term brakes the deployment; a kernel ignoring the law "
+        "energy; on the hub, the exit flux's moment dropped breaks the angular momentum and the "
+        "centripetal term dropped the momentum and energy; the strain rate without the l' term brakes the deployment; a kernel ignoring the law "
         "leaves A l unconserved. The birth remap (B) has no control: it is Python (deployment.birth_state), "
         "which no defect of the kernel reaches.",
         "",
@@ -625,7 +646,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir", type=Path)
     ap.add_argument("--quiet", action="store_true")
-    ap.add_argument("--parts", default="ABCDEFG", help="parts to run (A and C run together)")
+    ap.add_argument("--parts", default="ABCDEFGH", help="parts to run (A and C run together)")
     args = ap.parse_args(argv)
     out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
@@ -660,6 +681,8 @@ def main(argv=None) -> int:
         run_part("F", part_retrieval)
     if "G" in args.parts:
         run_part("G", part_convergence)
+    if "H" in args.parts:
+        run_part("H", part_hub)
     free = found.get("A+C")
     if free is not None:
         # the L/N control's weakest failure over A, C and D (measured / bound): the gate reads
@@ -667,6 +690,7 @@ def main(argv=None) -> int:
         control = min(free["control"], found["D"]) if found.get("D") is not None else free["control"]
         gates["deployment_rescaled_negative_control"] = 1.0 / control if control > 0 else math.inf
     figs = figures(out, free, found.get("E"), found.get("F"))
+    figs += hub_figures(out, found.get("H"))
     summary = {"gates": gates, "failures": failures, "wall_s": walls}
     (out / "deployment_summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     write_report(out, rows, gates, figs, walls)

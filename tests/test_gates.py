@@ -67,5 +67,10 @@ def test_every_gate_has_a_probe_or_a_reason_to_have_none():
                 "deployment_exponential_angle_over_budget", "deployment_exponential_tension_over_budget",
                 "deployment_retrieval_invariant", "deployment_rescaled_negative_control",
                 "deployment_no_ldot_negative_control", "deployment_frozen_negative_control",
-                "deployment_retirement_angmom_over_bound", "deployment_retirement_linear_only_negative_control"}
+                "deployment_retirement_angmom_over_bound", "deployment_retirement_linear_only_negative_control",
+                # and the rigid hub's two (part H, studies/deployment_hub.py)
+                "deployment_hub_angular_momentum_over_bound", "deployment_hub_momentum_over_bound",
+                "deployment_hub_energy_over_bound", "deployment_hub_exit_torque_negative_control",
+                "deployment_hub_centripetal_negative_control", "deployment_hub_axis_spin_over_bound",
+                "deployment_hub_ring_negative_control"}
     assert not (gates - probed - set(verify.TOOTHLESS) - credited), "gates neither probed nor explained"

@@ -342,6 +342,25 @@ MUTANTS = {
             mutate=_unstabilised,
             path="inextensible",
         ),
+        Mutant(
+            "reel_hub_exit_torque_dropped",
+            "a reel on a rigid body without the moment e x rho L'^2 (1 + eps) u of the exit's momentum flux",
+            "tether/reel_hub.py (p[H_MUTANT] = DEFECT_REEL_NO_EXIT_TORQUE)",
+            "docs/deployment.md 9.2 (the angular momentum balance of the hub with its stored tether)",
+            ("deployment_hub_angular_momentum_over_bound", "deployment_hub_exit_torque_negative_control"),
+            mutate=_flag(L.DEFECT_REEL_NO_EXIT_TORQUE),
+            path="reel",
+        ),
+        Mutant(
+            "reel_hub_ring_dropped",
+            "a reel on a rigid body without the ring's angular momentum m' (R_s^2/2)(omega + a (a.omega)) that the "
+            "material leaves in the body on its way from the spool's rim to the exit",
+            "tether/reel_hub.py (p[H_MUTANT] = DEFECT_REEL_NO_RING)",
+            "docs/deployment.md 9.2, eq. 9.3 (the on-axis spin-up's closed form)",
+            ("deployment_hub_axis_spin_over_bound", "deployment_hub_ring_negative_control"),
+            mutate=_flag(L.DEFECT_REEL_NO_RING),
+            path="reel",
+        ),
     )
 }
 

@@ -154,6 +154,8 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
             reel=None if t.reel is None else ReelSpec(
                 t.reel.law, t.reel.exit, t.length_m, t.reel.speed_m_s, t.reel.rate_1_s, t.reel.rod_length_m,
                 t.mass_kg / t.length_m, t.length_m + t.reel.stored_length_m, _reel_table(t.reel),
+                spool_radius_m=t.reel.spool_radius_m,
+                spool_axis=t.reel.spool_axis or t.reel.exit_direction or (0.0, 0.0, 0.0),
             ),
         ))  # fmt: skip
     nq = tethers[0].quadrature if tethers else 2  # one for every tether (checked at load)

@@ -44,6 +44,10 @@ class ReelSpec:
     density_kg_m: float
     line_length_m: float
     table: tuple = ()  # law "table": per interval (t_k, a0, a1, a2, a3), L = a0 + a1 s + a2 s^2 + a3 s^3
+    # on a rigid body: the stored tether is a thin ring of this radius about this axis (body axes, unit;
+    # a canister's is its exit direction), centred at the exit (docs/deployment.md 9)
+    spool_radius_m: float = 0.0
+    spool_axis: tuple = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -470,6 +474,8 @@ def _write_reel(v, i: int, k: int, body: int, g0: int, t: TetherSpec, body_mass_
     rv.density_kg_m = r.density_kg_m
     rv.body_mass_kg = body_mass_kg
     rv.line_length_m = r.line_length_m
+    rv.spool_radius_m = r.spool_radius_m
+    rv.spool_axis = r.spool_axis
     v.tether(k).reel = i + 1
 
 

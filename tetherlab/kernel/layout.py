@@ -34,6 +34,8 @@ DEFECT_NO_CENTRIPETAL = 22        # omega x (omega x rho) dropped from the attac
 DEFECT_REEL_RESCALED = 23         # a reel's tether as the peers pay it out: n fixed rods of L(t)/n, no flux (tether/reel.py)
 DEFECT_REEL_NO_LDOT = 24          # the strain rate of the rod at a reel without its l' term (tether/reel.py)
 DEFECT_REEL_FROZEN = 25           # the kernel ignores the reel's law: L stays L0 (tether/reel.py)
+DEFECT_REEL_NO_EXIT_TORQUE = 26   # a reel on a rigid body without the torque of the exit's momentum flux (tether/reel_hub.py)
+DEFECT_REEL_NO_RING = 27          # a reel on a rigid body without the ring's angular momentum left in the body (tether/reel_hub.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 

@@ -156,7 +156,7 @@ ROD = Record("rod", "RT_", 8, (
        doc="inextensible tethers: Baumgarte rate a of its length constraint, phi'' + 2a phi' + a^2 phi = 0"),
 ))
 
-REEL = Record("reel", "RL_", 16, (
+REEL = Record("reel", "RL_", 20, (
     _i("tether", "RL_TETH", "tether it pays out (at its end A_1)"),
     _i("body", "RL_BODY", "body carrying it (kernel order): the tether's parent"),
     _i("rod", "RL_ROD", "global index of the variable rod next to the reel (the tether's first)"),
@@ -171,6 +171,8 @@ REEL = Record("reel", "RL_", 16, (
     _f("line_length_m", "RL_LINE", unit="m", doc="whole line: deployed plus stored (stored = line - L)"),
     _i("table_offset", "RL_TOFF", "table law: offset of its intervals (t_k, then L's cubic coefficients)"),
     _i("table_intervals", "RL_TN", "table law: number of intervals"),
+    _f("spool_radius_m", "RL_SPR", unit="m", doc="rigid body: radius of the spool (a thin ring at the reel point)"),
+    _f("spool_axis", "RL_AX", 3, doc="rigid body: the spool's axis, body axes, unit (a drum turns +L'/radius about it)"),
 ))
 
 EFFECT = Record("effect", "ET_", 4, (

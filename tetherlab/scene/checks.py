@@ -5,12 +5,14 @@ initial layout every body needs, and what the kernel, the initial layout and the
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import numpy as np
 
 from ..errors import SceneError
 from ..model import topology
+from ..units import shown
 from .keys import _NOTHING
 from .data import (
     EQUILIBRIUM,
@@ -198,15 +200,51 @@ def _check_reel(scene: Scene, t: Tether, oriented, by_name: dict) -> None:
             f"its attachment end is 'to' ({t.to_body!r}); write the tether from {t.to_body!r} to {t.from_body!r}",
             f"a reel at 'from' = {t.from_body!r}",
         )  # fmt: skip
-    if by_name[t.from_body].rigid is not None:
-        raise SceneError(path, "a reel on a point-mass body (a reel on a rigid body is not built yet)",
-                         f"a reel on the rigid body {t.from_body!r}")  # fmt: skip
+    _check_reel_hub(t, by_name[t.from_body], path)
     if scene.integrator.formulation != "cowell":
         raise SceneError("integrator.formulation", "'cowell' for a scene with a reel (its rods are born and retired "
                          "between segments of the Cowell state)", repr(scene.integrator.formulation))  # fmt: skip
     if t.initial is not None and t.initial.shape != "straight":
         raise SceneError(f"tethers.{t.name}.initial.shape", "'straight' for a tether paid out by a reel",
                          repr(t.initial.shape))  # fmt: skip
+
+
+#: the exit point and the spool radius of a reel on a rigid body, at most this many times the body's
+#: size sqrt(tr J / m) (a solid sphere of radius r: 1.1 r): farther out the "rigid" body would be
+#: mostly a boom the inertia tensor does not describe
+REEL_SIZE_FACTOR = 10.0
+
+
+def _check_reel_hub(t: Tether, body, path: str) -> None:
+    """The keys of a reel on a rigid body: present there (exit point, direction, spool radius; a
+    drum's axis), absent on a point mass; the point and the radius within the body's size."""
+    r = t.reel
+    hub_keys = {"point": r.point_m, "exit_direction": r.exit_direction, "spool_radius": r.spool_radius_m or None,
+                "spool_axis": r.spool_axis}  # fmt: skip
+    if body.rigid is None:
+        for key, value in hub_keys.items():
+            if value is not None:
+                raise SceneError(f"{path}.{key}", f"no {key!r} for a reel on the point mass {body.name!r} (only a reel on "
+                                 "a rigid body has an exit point, direction and spool)", shown(value))  # fmt: skip
+        return
+    need = ("point", "exit_direction", "spool_radius") + (("spool_axis",) if r.exit == "drum" else ())
+    for key in need:
+        if hub_keys[key] is None:
+            what = {"point": "the exit point in body axes from the centre of mass (e.g. ['0 m', '0 m', '1 m'])",
+                    "exit_direction": "the direction the line leaves the exit, body axes (e.g. [0, 0, 1])",
+                    "spool_radius": "the radius of the spool the stored tether is wound on (e.g. '0.3 m')",
+                    "spool_axis": "the drum's axis, body axes, perpendicular to exit_direction"}[key]  # fmt: skip
+            raise SceneError(f"{path}.{key}", f"{what} for a reel on the rigid body {body.name!r}", _NOTHING)
+    J = np.array(body.rigid.inertia_kg_m2, float)
+    size = math.sqrt(float(np.trace(J)) / body.mass_kg)
+    limit = REEL_SIZE_FACTOR * size
+    dist = math.sqrt(sum(x * x for x in r.point_m))
+    if dist > limit:
+        raise SceneError(f"{path}.point", f"an exit point within {REEL_SIZE_FACTOR:g} times the body's size sqrt(tr J/m) "
+                         f"= {size:.4g} m of its centre of mass: at most {limit:.4g} m", f"{dist:.6g} m from it")  # fmt: skip
+    if r.spool_radius_m > limit:
+        raise SceneError(f"{path}.spool_radius", f"a spool radius within {REEL_SIZE_FACTOR:g} times the body's size "
+                         f"sqrt(tr J/m) = {size:.4g} m: at most {limit:.4g} m", f"{r.spool_radius_m:.6g} m")  # fmt: skip
 
 
 def _check_end_distance(t: Tether, distance: float, path: str) -> None:

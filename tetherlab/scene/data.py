@@ -222,6 +222,12 @@ class Reel:
     stored_length_m: float = 0.0  # tether still on the reel at t = 0
     times_s: tuple = ()  # law 'table': times from 0, increasing
     lengths_m: tuple = ()  # law 'table': L at those times (a natural cubic spline between them)
+    # on a rigid body (docs/deployment.md 9): the exit point and direction, body axes; the stored
+    # tether is a thin ring of spool_radius_m about spool_axis centred at the exit point
+    point_m: Vector3 | None = None
+    exit_direction: Vector3 | None = None  # unit
+    spool_radius_m: float = 0.0
+    spool_axis: Vector3 | None = None  # unit; a canister's is its exit direction
 
 
 @dataclass(frozen=True)

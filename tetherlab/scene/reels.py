@@ -11,10 +11,14 @@ from typing import Any
 from ..errors import SceneError
 from ..units import LENGTH, RATE, SPEED, TIME, shown
 from .data import REEL_EXITS, REEL_LAWS, Reel
-from .keys import _choice, _quantity, _required, _table
+from .keys import _choice, _number, _quantity, _required, _table, _vector
 
 _REEL_KEYS = ("at", "exit", "law", "speed", "rate", "times", "lengths", "rod_length", "birth_length", "retire_length",
-              "stored_length")
+              "stored_length", "point", "exit_direction", "spool_radius", "spool_axis")
+
+#: a drum's axis must be perpendicular to its exit direction within this cosine (its rim moves along
+#: the exit direction where the line leaves it)
+DRUM_AXIS_COS = 1e-6
 
 #: Default bounds in rod lengths: a birth at 1.5 leaves a first rod of 0.5, a retirement at 0.25
 #: leaves one of 1.25, both a quarter of a rod from the other bound.
@@ -71,7 +75,44 @@ def parse_reel(value: Any, path: str, length_m: float) -> Reel:
             f"{path}.retire_length", f"at most the deployed length ({length_m:.6g} m): at least one rod must be out",
             f"{retire:.6g} m",
         )
-    return Reel(law, exit_, speed, rate, rod, birth, retire, stored, times, lengths)
+    hub = _parse_hub(table, path, exit_)
+    return Reel(law, exit_, speed, rate, rod, birth, retire, stored, times, lengths, **hub)
+
+
+def _unit_vector(raw, key: str) -> tuple:
+    """A direction in body axes: 3 plain numbers, not all zero; returned normalised."""
+    if not isinstance(raw, (list, tuple)) or len(raw) != 3:
+        raise SceneError(key, "a list of 3 numbers (a direction in body axes, e.g. [0, 0, 1])", shown(raw))
+    v = [_number(x, f"{key}[{j}]", "a number") for j, x in enumerate(raw)]
+    n = math.sqrt(sum(x * x for x in v))
+    if not n > 0.0:
+        raise SceneError(key, "a direction of non-zero length (body axes)", shown(raw))
+    return tuple(x / n for x in v)
+
+
+def _parse_hub(table, path: str, exit_: str) -> dict:
+    """The keys of a reel on a rigid body (docs/deployment.md 9): the exit point (body axes, from
+    the centre of mass), the exit direction, the spool's radius and, for a drum, its axis.  Whether
+    the body is rigid is checked with the scene (scene/checks.py)."""
+    out: dict = {}
+    if "point" in table:
+        out["point_m"] = _vector(table["point"], f"{path}.point", LENGTH)
+    if "exit_direction" in table:
+        out["exit_direction"] = _unit_vector(table["exit_direction"], f"{path}.exit_direction")
+    if "spool_radius" in table:
+        out["spool_radius_m"] = _quantity(table["spool_radius"], f"{path}.spool_radius", LENGTH, positive=True)
+    if "spool_axis" in table:
+        if exit_ != "drum":
+            raise SceneError(f"{path}.spool_axis", "no spool_axis with exit 'canister' (a canister's axis is its "
+                             "exit_direction: the line is pulled off the end of the spool)", shown(table["spool_axis"]))  # fmt: skip
+        axis = _unit_vector(table["spool_axis"], f"{path}.spool_axis")
+        e = out.get("exit_direction")
+        if e is not None and abs(sum(a * b for a, b in zip(axis, e))) > DRUM_AXIS_COS:
+            raise SceneError(f"{path}.spool_axis", "an axis perpendicular to exit_direction (the drum's rim moves along "
+                             "the exit direction where the line leaves it)", f"{shown(table['spool_axis'])}, "
+                             f"cosine {sum(a * b for a, b in zip(axis, e)):.3g} with exit_direction")  # fmt: skip
+        out["spool_axis"] = axis
+    return out
 
 
 def _table_law(table, path: str, length_m: float) -> tuple[tuple, tuple]:

@@ -191,6 +191,14 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
                 else:
                     entry["reel"]["times"] = [format_si(x, TIME) for x in r.times_s]
                     entry["reel"]["lengths"] = [format_si(x, LENGTH) for x in r.lengths_m]
+                if r.point_m is not None:  # a reel on a rigid body
+                    entry["reel"]["point"] = _vec(r.point_m, LENGTH)
+                if r.exit_direction is not None:
+                    entry["reel"]["exit_direction"] = [float(x) for x in r.exit_direction]
+                if r.spool_radius_m > 0.0:
+                    entry["reel"]["spool_radius"] = format_si(r.spool_radius_m, LENGTH)
+                if r.spool_axis is not None:
+                    entry["reel"]["spool_axis"] = [float(x) for x in r.spool_axis]
             # A default shape is left out: it reads back the same, and a sweep that later places
             # both ends explicitly is not tripped by a shape nobody asked for.
             if t.initial is not None and t.initial != InitialShape():

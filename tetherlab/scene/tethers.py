@@ -148,6 +148,13 @@ def _parse_tethers(value: Any, bodies: tuple[Body, ...]) -> tuple[Tether, ...]:
         from_point = _vector(table["from_point"], f"{path}.from_point", LENGTH) if "from_point" in table else None
         to_point = _vector(table["to_point"], f"{path}.to_point", LENGTH) if "to_point" in table else None
         rate = _inextensible_keys(table, path, model, reel, tension_only, damping)
+        rigid_start = any(b.name == start and b.rigid is not None for b in bodies)
+        if reel is not None and reel.point_m is not None and rigid_start:  # the reel's exit is the attachment
+            if from_point is None:
+                from_point = reel.point_m
+            elif any(abs(a - b) > 1e-12 * max(1.0, abs(b)) for a, b in zip(from_point, reel.point_m)):
+                raise SceneError(f"{path}.from_point", f"the reel's point {reel.point_m} m (the tether leaves the reel at its "
+                                 "exit: leave from_point out or write the same point)", f"{from_point} m")  # fmt: skip
         tethers.append(
             Tether(name, start, end, rods, length, ea, mass, damping, model, quadrature, diameter, tension_only=tension_only,
                    initial=initial, from_point_m=from_point, to_point_m=to_point, reel=reel, constraint_rate_1_s=rate)

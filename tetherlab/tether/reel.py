@@ -17,7 +17,8 @@ What the reel changes in an evaluation, in the order the driver (tether/solve.py
   term, eps' = (u.D' - (1 + eps) l')/l;
 * :func:`reel_body_forces`, after the bodies' set-up: the momentum flux through the exit,
   -rho l'^2 (1 + eps) u on the carrying body (docs/deployment.md 4), the same for a drum and a
-  canister on a point body (they differ in where the energy goes, not in the forces).
+  canister on a point body (they differ in where the energy goes, not in the forces); on a rigid
+  body also the stored tether's inertia and the flux's moment (tether/reel_hub.py).
 
 Scenes without a reel never call any of them (the count H_NREEL is 0).
 """
@@ -32,6 +33,7 @@ from ..kernel.layout import (
     BS_SIZE,
     BT_INV_M,
     BT_M,
+    BT_RIGID,
     BT_SIZE,
     DEFECT_REEL_FROZEN,
     DEFECT_REEL_NO_LDOT,
@@ -92,6 +94,7 @@ from ..kernel.layout import (
     TT_SIZE,
 )
 from ..kernel.vec3 import dot
+from .reel_hub import reel_hub_terms
 from .rod import SQ3, fail
 
 
@@ -264,3 +267,5 @@ def reel_body_forces(p):
         p[F] -= j * p[sb + SR_U]
         p[F + 1] -= j * p[sb + SR_U + 1]
         p[F + 2] -= j * p[sb + SR_U + 2]
+        if p[int(p[H_OFF_BODY]) + b * BT_SIZE + BT_RIGID] != 0.0:  # the stored tether's inertia, the flux's moment
+            reel_hub_terms(p, i, j, p[sb + SR_U], p[sb + SR_U + 1], p[sb + SR_U + 2])

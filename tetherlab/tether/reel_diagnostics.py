@@ -11,7 +11,9 @@ its Carnot part (a canister: 1/2 rho |L'|^3 (1 + eps)^2; a drum: 0), and the mat
 of the first rod's shares: the TMED shares (tether/rod.py) count the affine field v_A + xi D', the
 material moves with v_A + xi D' + (1 - xi) w, w = lambda D, which adds
 
-    momentum m w/2,   angular momentum r_A x m w/2,   kinetic energy m w.(v_A/2 + D'/6) + m |w|^2/6.
+    momentum m w/2,   angular momentum r_A x m w/2,   kinetic energy m w.(v_A/2 + D'/6) + m |w|^2/6,
+
+and on a rigid body the stored tether's own share off the centre of mass (tether/reel_hub.py).
 """
 
 from __future__ import annotations
@@ -19,7 +21,10 @@ from __future__ import annotations
 from .._jit import njit
 from ..kernel.layout import (
     BS_SIZE,
+    BT_RIGID,
+    BT_SIZE,
     H_NBODY,
+    H_OFF_BODY,
     H_NQT,
     H_NREEL,
     H_NRODS,
@@ -30,6 +35,7 @@ from ..kernel.layout import (
     H_OFF_SCR,
     H_OFF_TETH,
     REEL_EXIT_CANISTER,
+    RL_BODY,
     RL_EXIT,
     RL_RHO,
     RL_ROD,
@@ -55,6 +61,7 @@ from ..kernel.layout import (
     TT_ROD0,
     TT_SIZE,
 )
+from .reel_hub import reel_hub_share
 from .rod import SQ3
 from .solve import system_accelerations
 
@@ -134,4 +141,15 @@ def reel_rows(ts, Y, p, out, acc, datt):
                 wx * wx + wy * wy + wz * wz
             ) / 6.0
             o[16] = p[sb + SR_FE]
+            if p[int(p[H_OFF_BODY]) + int(p[rb + RL_BODY]) * BT_SIZE + BT_RIGID] != 0.0:
+                # the stored tether on a rigid body: off its centre of mass, with its inertia
+                s0, s1, s2, s3, s4, s5, s6, s7 = reel_hub_share(p, i)
+                o[7] -= s7
+                o[9] += s0
+                o[10] += s1
+                o[11] += s2
+                o[12] += s3
+                o[13] += s4
+                o[14] += s5
+                o[15] += s6
     return -1

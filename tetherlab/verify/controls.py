@@ -220,8 +220,9 @@ def mutation_summary(cells, gates: dict, study_values: dict):
             by_defect.setdefault(d, []).append("hub_spoke_radius_tip_over_bound")
             by_gate.setdefault("hub_spoke_radius_tip_over_bound", []).append(d)
             by_gate.setdefault("hub_spoke_radius_defects_negative_control", []).append(d)
-    # the deployment study runs the reel kernel's three defects itself (studies/deployment.py): each
-    # control gate passes only if its defect failed every gate listed here
+    # the deployment study runs the reel kernel's defects (and, on the rigid hub, the rigid bodies'
+    # centripetal one) itself (studies/deployment.py): each control gate passes only if its defect
+    # failed every gate listed here
     for ctrl_gate, defect, caught_by in (
         ("deployment_rescaled_negative_control", "reel_rescaled",
          ("deployment_momentum_over_bound", "deployment_angular_momentum_over_bound", "deployment_energy_over_bound",
@@ -232,6 +233,11 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         # (the remap is Python: deployment.retire_state's P-only correction, run by the study itself)
         ("deployment_retirement_linear_only_negative_control", "retire_remap_linear_only",
          ("deployment_retirement_angmom_over_bound",)),
+        ("deployment_hub_exit_torque_negative_control", "reel_hub_exit_torque_dropped",
+         ("deployment_hub_angular_momentum_over_bound",)),
+        ("deployment_hub_centripetal_negative_control", "rigid_centripetal_dropped",
+         ("deployment_hub_momentum_over_bound", "deployment_hub_energy_over_bound")),
+        ("deployment_hub_ring_negative_control", "reel_hub_ring_dropped", ("deployment_hub_axis_spin_over_bound",)),
     ):  # fmt: skip
         ctrl = study_values.get(ctrl_gate)
         if ctrl is not None and ctrl <= gates[ctrl_gate]["threshold"]:

@@ -174,6 +174,14 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_rescaled_negative_control": g.get("deployment_rescaled_negative_control"),
         "deployment_no_ldot_negative_control": g.get("deployment_no_ldot_negative_control"),
         "deployment_frozen_negative_control": g.get("deployment_frozen_negative_control"),
+        # part H: a reel on a spinning rigid hub (studies/deployment_hub.py, docs/deployment.md 9)
+        "deployment_hub_angular_momentum_over_bound": g.get("deployment_hub_angular_momentum_over_bound"),
+        "deployment_hub_momentum_over_bound": g.get("deployment_hub_momentum_over_bound"),
+        "deployment_hub_energy_over_bound": g.get("deployment_hub_energy_over_bound"),
+        "deployment_hub_exit_torque_negative_control": g.get("deployment_hub_exit_torque_negative_control"),
+        "deployment_hub_centripetal_negative_control": g.get("deployment_hub_centripetal_negative_control"),
+        "deployment_hub_axis_spin_over_bound": g.get("deployment_hub_axis_spin_over_bound"),
+        "deployment_hub_ring_negative_control": g.get("deployment_hub_ring_negative_control"),
     }
 
 
