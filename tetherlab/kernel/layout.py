@@ -35,6 +35,7 @@ DEFECT_REEL_RESCALED = 23         # a reel's tether as the peers pay it out: n f
 DEFECT_REEL_NO_LDOT = 24          # the strain rate of the rod at a reel without its l' term (tether/reel.py)
 DEFECT_REEL_FROZEN = 25           # the kernel ignores the reel's law: L stays L0 (tether/reel.py)
 DEFECT_SPOOL_UNCOUPLED = 26       # the spool's L'' solved with the exit tension at L'' = 0 (tether/reel_spool.py)
+DEFECT_TENSION_K2_SIGN = 27       # the tension law with the sign of its rate gain k2 flipped (tether/reel_spool.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 

@@ -32,6 +32,7 @@ import numpy as np
 from .._jit import njit
 from ..kernel.layout import (
     DEFECT_SPOOL_UNCOUPLED,
+    DEFECT_TENSION_K2_SIGN,
     H_MUTANT,
     H_NREEL,
     H_NRODS,
@@ -108,7 +109,8 @@ def tension_command(p, rb, L, Ld):
     e^(-d/w) w off the linear law at a distance d from it)."""
     om = p[rb + RL_OMEGA]
     lc = p[rb + RL_LC]
-    tc = p[rb + RL_MSTAR] * om * om * (3.0 * lc + p[rb + RL_K1] * (L - lc) + p[rb + RL_K2] * Ld / om)
+    k2 = -p[rb + RL_K2] if int(p[H_MUTANT]) == DEFECT_TENSION_K2_SIGN else p[rb + RL_K2]
+    tc = p[rb + RL_MSTAR] * om * om * (3.0 * lc + p[rb + RL_K1] * (L - lc) + k2 * Ld / om)
     w = p[rb + RL_TW]
     if w > 0.0:
         lo = p[rb + RL_TMIN]
