@@ -219,6 +219,9 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         ("deployment_no_ldot_negative_control", "reel_strain_rate_without_ldot",
          ("deployment_exponential_angle_over_budget", "deployment_exponential_tension_over_budget")),
         ("deployment_frozen_negative_control", "reel_law_frozen", ("deployment_retrieval_invariant",)),
+        ("deployment_spool_uncoupled_negative_control", "spool_uncoupled",
+         ("deployment_spool_drum_over_budget", "deployment_spool_energy_over_bound")),
+        ("deployment_tension_k2_negative_control", "tension_k2_flipped", ("deployment_tension_roots_over_budget",)),
     ):  # fmt: skip
         ctrl = study_values.get(ctrl_gate)
         if ctrl is not None and ctrl <= gates[ctrl_gate]["threshold"]:

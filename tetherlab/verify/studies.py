@@ -172,6 +172,11 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_rescaled_negative_control": g.get("deployment_rescaled_negative_control"),
         "deployment_no_ldot_negative_control": g.get("deployment_no_ldot_negative_control"),
         "deployment_frozen_negative_control": g.get("deployment_frozen_negative_control"),
+        "deployment_spool_drum_over_budget": g.get("deployment_spool_drum_over_budget"),
+        "deployment_spool_energy_over_bound": g.get("deployment_spool_energy_over_bound"),
+        "deployment_tension_roots_over_budget": g.get("deployment_tension_roots_over_budget"),
+        "deployment_spool_uncoupled_negative_control": g.get("deployment_spool_uncoupled_negative_control"),
+        "deployment_tension_k2_negative_control": g.get("deployment_tension_k2_negative_control"),
     }
 
 
