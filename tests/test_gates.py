@@ -61,10 +61,14 @@ def test_every_gate_has_a_probe_or_a_reason_to_have_none():
                 "hub_spoke_radius_defects_negative_control",
                 # the n = 512 hard case runs damping_sign itself (studies/hard_cases.py part 5)
                 "hard_cases_n512_stability", "hard_cases_n512_negative_control",
-                # the deployment study runs the reel kernel's three defects itself (studies/deployment.py)
+                # the deployment study runs the reel kernel's defects itself (studies/deployment.py)
                 "deployment_momentum_over_bound", "deployment_angular_momentum_over_bound",
                 "deployment_energy_over_bound", "deployment_retirement_momentum_over_bound",
                 "deployment_exponential_angle_over_budget", "deployment_exponential_tension_over_budget",
                 "deployment_retrieval_invariant", "deployment_rescaled_negative_control",
-                "deployment_no_ldot_negative_control", "deployment_frozen_negative_control"}
+                "deployment_no_ldot_negative_control", "deployment_frozen_negative_control",
+                # and the spool's two (part G)
+                "deployment_spool_drum_over_budget", "deployment_spool_energy_over_bound",
+                "deployment_tension_roots_over_budget", "deployment_spool_uncoupled_negative_control",
+                "deployment_tension_k2_negative_control"}
     assert not (gates - probed - set(verify.TOOTHLESS) - credited), "gates neither probed nor explained"
