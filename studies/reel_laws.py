@@ -30,13 +30,14 @@ G = 9.80665  # m/s^2, the scene's uniform gravity (standard gravity, forces/unif
 DRUM = dict(M=10.0, rho=1.0, L0=10.0, stored=90.0, J=2.0, R=0.2, EA=1e9)
 
 
-def drum_scene(*, torque="10 N m", duration="10 s", count=101, friction=None, rtol=1e-10, ea_N=None):
+def drum_scene(*, torque="10 N m", duration="10 s", count=101, friction=None, rtol=1e-10, ea_N=None, rod_length="200 m"):
     """A fixed nail with a drum (J = 2 kg m^2, R = 0.2 m: J/R^2 = 50 kg) pays out a 1 kg/m line
     (10 m out, 90 m stored, EA 1e9 N) to a 10 kg end mass hanging straight down, released at rest
     with the line unstretched.  ``friction``: (viscous N s/m, Coulomb N) on the spool; ``ea_N``
-    another stiffness (a softer line rings slower than the outputs sample it)."""
+    another stiffness (a softer line rings slower than the outputs sample it); ``rod_length``: one
+    rod by default, shorter for births (located events under a spool law)."""
     d = DRUM
-    reel = {"law": "spool", "exit": "drum", "rod_length": "200 m", "retire_length": "1 m",
+    reel = {"law": "spool", "exit": "drum", "rod_length": rod_length, "retire_length": "1 m",
             "stored_length": f"{d['stored']} m", "spool_inertia": f"{d['J']} kg m2", "drum_radius": f"{d['R']} m",
             "torque": torque}  # fmt: skip
     if friction is not None:
