@@ -33,6 +33,9 @@ G. The reel as a dynamical system (studies/reel_laws.py, docs/deployment.md 10-1
    frictions; the tension law's modes against the roots of s^4 + k2 s^3 + (k1 + 4) s^2 + 3 k2 s
    + 3 (k1 - 3). Controls: the exit tension's coupling with L'' dropped (DEFECT_SPOOL_UNCOUPLED)
    must fail the first two, the sign of k2 flipped (DEFECT_TENSION_K2_SIGN) the third.
+H. A SEDS-like deployment (studies/reel_laws.py seds_scene): 20 km from a canister through a
+   passive friction brake to a 25 kg end mass from 400 km, run to the end of the line; no gate
+   (no published profile is reproduced), the swing angle and tension profile as figures.
 F. Slow retrieval (adiabatic invariant): 10 km hauled in at l'/l = -0.02 Omega for 5 orbits on a
    7000 km orbit, libration started 5 deg off the steady angle: A l / (A0 l0) stays 1 within 0.021
    (|c|/sqrt3 + A^2/8 + 4 l/a). Control: a kernel that ignores the law (DEFECT_REEL_FROZEN).
@@ -405,40 +408,80 @@ def part_spool():
                          "tension_ctrl": tc}
 
 
-def spool_figures(out: Path, spool: dict | None) -> list[str]:
-    """The drum against its oracle and the tension law's perturbation decaying (part G)."""
-    if spool is None:
+def part_seds():
+    """H: the SEDS-like deployment to the end of its line (no gate)."""
+    from studies import reel_laws as RL
+
+    run = simulate_reel(RL.seds_scene(), progress=False, raise_on_failure=False)
+    if run.stopped_by != "reel.main.spent":
+        raise RuntimeError(f"part H: the deployment did not reach the end of its line: {run.message}")
+    prof = RL.seds_profile(run)
+    births = sum(c["change"] == "birth" for c in run.changes)
+    rows = [{"case": "H SEDS-like: end of deployment (20 km)", "value": float(prof["t"][-1] / 60.0), "unit": "min",
+             "note": f"swing angle {math.degrees(prof['theta'][-1]):.1f} deg, speed {prof['v'][-1]:.1f} m/s, "
+                     f"tension {prof['T'][-1]:.3f} N at the end; {births} births; no gate"}]  # fmt: skip
+    return rows, {}, prof
+
+
+def spool_figures(out: Path, spool: dict | None, seds: dict | None = None) -> list[str]:
+    """The drum against its oracle and the tension law's perturbation decaying (part G); the
+    SEDS-like swing angle and tension profile (part H)."""
+    if spool is None and seds is None:
         return []
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from studies import reel_laws as RL
+    names = []
+    if spool is not None:
+        from studies import reel_laws as RL
 
-    fig, axes = plt.subplots(1, 2, figsize=(13, 4.2))
-    r = spool["drum"].reel
-    t = r["t_s"].to_numpy()
-    axes[0].plot(t, r["deployed_length_m"], "C0-", label="tetherlab: the spool's L")
-    axes[0].plot(t, RL.drum_oracle(t, spool["torque"]), "k:", label="closed form (11.1)")
-    axes[0].set_xlabel("t (s)")
-    axes[0].set_ylabel("deployed length (m)")
-    axes[0].set_title("G: a drum in uniform gravity, tau = 10 N m")
-    axes[0].legend(fontsize=8)
-    c = spool["tension"]["curves"]
-    axes[1].plot(c["tau"] / (2 * math.pi), c["xi"], "C0-", label="xi = L/l_c - 1")
-    axes[1].plot(c["tau"] / (2 * math.pi), c["theta"], "C1-", label="in-plane angle (rad)")
-    if "curves" in spool["tension_ctrl"]:
-        cc = spool["tension_ctrl"]["curves"]
-        axes[1].plot(cc["tau"] / (2 * math.pi), cc["xi"], "C3--", lw=1, label="control: k2 flipped, xi")
-    axes[1].set_ylim(-0.03, 0.03)
-    axes[1].set_xlabel("t (orbits)")
-    axes[1].set_title("G: the tension law k1 = 4, k2 = 1 about l_c = 1 km")
-    axes[1].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "deployment_spool.png", dpi=110)
-    plt.close(fig)
-    return ["deployment_spool.png"]
+        fig, axes = plt.subplots(1, 2, figsize=(13, 4.2))
+        r = spool["drum"].reel
+        t = r["t_s"].to_numpy()
+        axes[0].plot(t, r["deployed_length_m"], "C0-", label="tetherlab: the spool's L")
+        axes[0].plot(t, RL.drum_oracle(t, spool["torque"]), "k:", label="closed form (11.1)")
+        axes[0].set_xlabel("t (s)")
+        axes[0].set_ylabel("deployed length (m)")
+        axes[0].set_title("G: a drum in uniform gravity, tau = 10 N m")
+        axes[0].legend(fontsize=8)
+        c = spool["tension"]["curves"]
+        axes[1].plot(c["tau"] / (2 * math.pi), c["xi"], "C0-", label="xi = L/l_c - 1")
+        axes[1].plot(c["tau"] / (2 * math.pi), c["theta"], "C1-", label="in-plane angle (rad)")
+        if "curves" in spool["tension_ctrl"]:
+            cc = spool["tension_ctrl"]["curves"]
+            axes[1].plot(cc["tau"] / (2 * math.pi), cc["xi"], "C3--", lw=1, label="control: k2 flipped, xi")
+        axes[1].set_ylim(-0.03, 0.03)
+        axes[1].set_xlabel("t (orbits)")
+        axes[1].set_title("G: the tension law k1 = 4, k2 = 1 about l_c = 1 km")
+        axes[1].legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(out / "deployment_spool.png", dpi=110)
+        plt.close(fig)
+        names.append("deployment_spool.png")
+    if seds is not None:
+        fig, axes = plt.subplots(1, 2, figsize=(13, 4.2))
+        tm = seds["t"] / 60.0
+        axes[0].plot(tm, np.degrees(seds["theta"]), "C0-", label="in-plane swing angle")
+        axes[0].set_xlabel("t (min)")
+        axes[0].set_ylabel("swing angle from the local vertical (deg)", color="C0")
+        ax2 = axes[0].twinx()
+        ax2.plot(tm, seds["L"] / 1e3, "C1-", label="deployed length")
+        ax2.set_ylabel("deployed length (km)", color="C1")
+        axes[0].set_title("H: SEDS-like deployment, 20 km through a friction brake")
+        axes[1].plot(tm, seds["T"], "C2-", label="tension at the exit")
+        axes[1].set_xlabel("t (min)")
+        axes[1].set_ylabel("tension (N)", color="C2")
+        ax3 = axes[1].twinx()
+        ax3.plot(tm, seds["v"], "C3-", label="deployment speed")
+        ax3.set_ylabel("deployment speed (m/s)", color="C3")
+        axes[1].set_title("H: tension and speed profile")
+        fig.tight_layout()
+        fig.savefig(out / "deployment_seds.png", dpi=110)
+        plt.close(fig)
+        names.append("deployment_seds.png")
+    return names
 
 
 # -- report --------------------------------------------------------------------------------------
@@ -588,7 +631,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir", type=Path)
     ap.add_argument("--quiet", action="store_true")
-    ap.add_argument("--parts", default="ABCDEFG", help="parts to run (A and C run together)")
+    ap.add_argument("--parts", default="ABCDEFGH", help="parts to run (A and C run together)")
     args = ap.parse_args(argv)
     out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
@@ -623,13 +666,15 @@ def main(argv=None) -> int:
         run_part("F", part_retrieval)
     if "G" in args.parts:
         run_part("G", part_spool)
+    if "H" in args.parts:
+        run_part("H", part_seds)
     free = found.get("A+C")
     if free is not None:
         # the L/N control's weakest failure over A, C and D (measured / bound): the gate reads
         # bound / measured, <= 1 when it failed every gate it must
         control = min(free["control"], found["D"]) if found.get("D") is not None else free["control"]
         gates["deployment_rescaled_negative_control"] = 1.0 / control if control > 0 else math.inf
-    figs = figures(out, free, found.get("E"), found.get("F")) + spool_figures(out, found.get("G"))
+    figs = figures(out, free, found.get("E"), found.get("F")) + spool_figures(out, found.get("G"), found.get("H"))
     summary = {"gates": gates, "failures": failures, "wall_s": walls}
     (out / "deployment_summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     write_report(out, rows, gates, figs, walls)

@@ -9,7 +9,8 @@
 * K, the tension law T = m* Omega^2 [3 l_c + k1 (l - l_c) + k2 l'/Omega] on a circular orbit: the
   decay rates and frequencies of a small perturbation about l_c, measured by a Prony fit of the
   in-plane angle and of the length, against the roots of s^4 + k2 s^3 + (k1 + 4) s^2 + 3 k2 s
-  + 3 (k1 - 3) (11.3); negative control: the sign of k2 flipped (DEFECT_TENSION_K2_SIGN).
+  + 3 (k1 - 3) (11.3); negative control: the sign of k2 flipped (DEFECT_TENSION_K2_SIGN);
+* S, a SEDS-like deployment (no gate: its swing angle and tension profile, docs/deployment.md 12).
 
 The tests (tests/test_reel_spool.py) import these scenes and measures: one definition.
 """
@@ -195,3 +196,39 @@ def tension_measure(run, om: float) -> dict:
 def tension_run(defect: int = 0):
     scene, om, _ = tension_scene()
     return simulate_reel(scene, defect=defect, raise_on_failure=False, progress=False), om
+
+
+# -- S: a SEDS-like deployment -------------------------------------------------------------------
+SEDS = dict(h=400e3, M=1000.0, m=25.0, line=20e3, L0=200.0, rho=3.5e-4, EA=2e4, v0=1.6, brake=0.05)
+
+
+def seds_scene(*, count=601):
+    """SEDS-like (Small Expendable Deployer System; SEDS-1, 1993): a 1 t stage on a 400 km circular
+    orbit ejects a 25 kg end mass downwards at 1.6 m/s on a 20 km line of 0.35 g/m (7 kg; EA 20 kN,
+    damping 50 N s) paid out of a canister through a passive friction brake (Coulomb 0.05 N,
+    smooth over 1 cm/s), 200 m out at the start, rods of 2 km; the run ends when the whole line is
+    out (the event reel.main.spent)."""
+    c = SEDS
+    a_m = 6378.137e3 + c["h"]
+    return Scene.from_dict({
+        "name": "seds-like", "duration": "2 orbits", "effects": {"central_gravity": {}},
+        "bodies": {"m0": {"mass": f"{c['M']} kg"}, "mf": {"mass": f"{c['m']} kg"}},
+        "orbit": {"reference": "center_of_mass", "motion": "corotating", "elements": {
+            "a": f"{a_m / 1e3} km", "e": 0.0, "i": "0 deg", "raan": "0 deg", "argp": "0 deg", "nu": "0 deg"}},
+        "tethers": {"main": {
+            "from": "m0", "to": "mf", "length": f"{c['L0']} m", "EA": f"{c['EA']} N", "linear_density": f"{c['rho']} kg/m",
+            "damping": "50 N s", "model": "energy", "initial": {"shape": "straight", "theta": "0 deg"},
+            "reel": {"law": "spool", "exit": "canister", "speed": f"{c['v0']} m/s", "rod_length": "2 km",
+                     "retire_length": "100 m", "stored_length": f"{c['line'] - c['L0']} m",
+                     "coulomb_friction": f"{c['brake']} N", "friction_speed": "0.01 m/s"}}},
+        "integrator": {"method": "radau5", "rtol": 1e-8, "atol": 1e-8},
+        "output": {"count": count},
+    })  # fmt: skip
+
+
+def seds_profile(run) -> dict:
+    """Time, deployed length, speed, exit tension and in-plane swing angle of a SEDS-like run."""
+    r = run.reel
+    dg = pd.concat([ph.diagnostics[["main.theta_rad"]] for ph in run.phases], ignore_index=True)
+    return {"t": r["t_s"].to_numpy(), "L": r["deployed_length_m"].to_numpy(), "v": r["speed_m_s"].to_numpy(),
+            "T": r["exit_tension_N"].to_numpy(), "theta": dg["main.theta_rad"].to_numpy()}

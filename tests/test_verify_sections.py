@@ -130,7 +130,7 @@ def test_deployment_section_measures_every_deployment_gate(tmp_path):
         assert verify.gate_section(g) == "study-deployment"
     md = sections[0][2]
     for fig in ("deployment_length_rods", "deployment_momentum", "deployment_exponential_angle",
-                "deployment_retrieval_invariant", "deployment_spool"):
+                "deployment_retrieval_invariant", "deployment_spool", "deployment_seds"):
         assert f"(deployment/{fig}.png)" in md and (tmp_path / "deployment" / f"{fig}.png").is_file()
 
 

@@ -9,9 +9,10 @@ so no step ever straddles a kink.  Components, in this order (see :func:`event_c
 * one per rod of every ``tension_only`` tether: g = min(EA eps, EA eps + D eps').  The axial
   force max(0, EA eps + D eps') for eps > 0 (zero otherwise) switches exactly where g changes
   sign, so a tether going slack or snapping taut is a located event, not luck;
-* two per reel under a spool law (terminal): its first rod's length at the birth bound and at the
-  retirement bound (``reel.<tether>.birth``, ``reel.<tether>.retire``): the phase of the
-  deployment ends there (tetherlab/deployment.py);
+* three per reel under a spool law (terminal): its first rod's length at the birth bound and at
+  the retirement bound (``reel.<tether>.birth``, ``reel.<tether>.retire``: the phase of the
+  deployment ends there, tetherlab/deployment.py), and the whole line paid out
+  (``reel.<tether>.spent``: the run ends there, the end of the deployment);
 * with the Cowell formulation (header H_EV_WHEELS), per wheel with a ``max_torque`` the torque
   limit max_torque - |command| and per wheel with a ``max_speed`` the speed cut-off
   (bodies/wheels.py::limit_events): negative while the limit acts, so saturation entered and left
@@ -54,6 +55,7 @@ from .layout import (
     H_OFF_ROD,
     RL_FIXED,
     RL_LBIRTH,
+    RL_LINE,
     RL_LRETIRE,
     RL_SIZE,
     RL_SOFF,
@@ -113,7 +115,8 @@ def event_values(t, y, g_ptr, p):
         l = y[2 * h + so] - p[rb + RL_FIXED]
         g_ptr[k] = l - p[rb + RL_LBIRTH]
         g_ptr[k + 1] = l - p[rb + RL_LRETIRE]
-        k += 2
+        g_ptr[k + 2] = p[rb + RL_LINE] - y[2 * h + so]
+        k += 3
     if p[H_EV_WHEELS] != 0.0:
         nw = int(p[H_NWHEEL])
         acc = np.empty(h)
@@ -154,8 +157,9 @@ def event_components(model, stop_radius_m: float = 0.0, wheel_limits: bool = Fal
                 names.append(f"slack.{t.name}.rod{i + 1}")
                 terminal.append(False)
     for k in model.state.spools:  # terminal: a birth or retirement ends the phase (deployment.py)
-        names.extend([f"reel.{model.tethers[k].name}.birth", f"reel.{model.tethers[k].name}.retire"])
-        terminal.extend([True, True])
+        n = model.tethers[k].name
+        names.extend([f"reel.{n}.birth", f"reel.{n}.retire", f"reel.{n}.spent"])
+        terminal.extend([True, True, True])
     if wheel_limits:
         for b in model.bodies:  # kernel body order, wheels in file order: the wheel table's order
             rig = getattr(b, "rigid", None)

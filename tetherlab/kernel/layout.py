@@ -56,14 +56,14 @@ FAIL_ROD_COLLAPSE = 11   # a rod shortened below H_MIN_STRAIN (length -> 0: the 
 FAIL_NONFINITE = 12      # a non-finite force or acceleration
 FAIL_SINGULAR = 13       # the reaction system could not be solved
 FAIL_REEL_EMPTY = 14     # the variable rod at a reel reached zero length (retrieved past its end)
-FAIL_REEL_SPENT = 15     # a spool law paid out more than the whole line
+FAIL_REEL_SPENT = 15     # a spool law paid out so far beyond the whole line that its body's mass is gone
 
 FAIL_TEXT = {
     FAIL_ROD_COLLAPSE: "rod collapsed (its length went to zero or below the minimum strain)",
     FAIL_NONFINITE: "non-finite force or acceleration",
     FAIL_SINGULAR: "singular reaction system",
     FAIL_REEL_EMPTY: "the rod at the reel was retrieved to zero length",
-    FAIL_REEL_SPENT: "a reel paid out its whole line (stored length below zero)",
+    FAIL_REEL_SPENT: "a reel paid out beyond its whole line (its body's mass with the stored tether at or below zero)",
 }
 
 # part kind of each body (bodies/parts.py dispatches every part function on it); the code lives in

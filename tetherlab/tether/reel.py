@@ -144,7 +144,9 @@ def reel_update(t, att, p):
                 L, Ld, Ldd = att[so], att[so + 1], p[rs + RS_LDD]
             else:  # a kinematic use without the first-order block (statics): the law's start, at rest
                 L, Ld, Ldd = p[rb + RL_L0], 0.0, 0.0
-            if L > p[rb + RL_LINE]:
+            # beyond the whole line only a trial stage goes (the event reel.<tether>.spent ends
+            # the run there); the body's mass must stay positive for it
+            if not p[rb + RL_MBODY] + p[rb + RL_RHO] * (p[rb + RL_LINE] - L) > 0.0:
                 return fail(p, FAIL_REEL_SPENT, int(p[rb + RL_ROD]), t, L)
         else:
             L, Ld, Ldd = reel_law(p, rb, t)
