@@ -39,6 +39,15 @@ H. A spinning rigid hub with a wheel pays out from a reel off its centre of mass
    (studies/deployment_hub.py): total angular momentum (hub, wheel, stored tether and spool, rods)
    within 100 rtol |H(0)|, momentum and E + W_exit as above; what the attitude does in a figure.
    Control: the moment of the exit's momentum flux dropped (DEFECT_REEL_NO_EXIT_TORQUE).
+I. The reel as a dynamical system (studies/reel_laws.py, docs/deployment.md 10-11): a frictionless
+   drum in uniform gravity against the closed form of (J/R^2 + M + rho L_tot) l'' = (M + rho l) g
+   - tau/R; the energy balance E + K_spool + W_brake + W_loss = const with a brake and both
+   frictions; the tension law's modes against the roots of s^4 + k2 s^3 + (k1 + 4) s^2 + 3 k2 s
+   + 3 (k1 - 3). Controls: the exit tension's coupling with L'' dropped (DEFECT_SPOOL_UNCOUPLED)
+   must fail the first two, the sign of k2 flipped (DEFECT_TENSION_K2_SIGN) the third.
+J. A SEDS-like deployment (studies/reel_laws.py seds_scene): 20 km from a canister through a
+   passive friction brake to a 25 kg end mass from 400 km, run to the end of the line; no gate
+   (no published profile is reproduced), the swing angle and tension profile as figures.
 
     PYTHONPATH=. python studies/deployment.py OUTDIR [--quiet]
 """
@@ -410,6 +419,137 @@ def part_retrieval():
     return rows, gates, {"ratio": ratio, "L": L, "c_ratio": c_ratio, "c_L": c_L}
 
 
+def part_spool():
+    """G: the spool's three gates and their two controls (docs/deployment.md 11)."""
+    from studies import reel_laws as RL
+    from tetherlab.model.params import DEFECT_SPOOL_UNCOUPLED, DEFECT_TENSION_K2_SIGN
+
+    torque = 10.0  # N m, drum_scene's default
+    drum = simulate_reel(RL.drum_scene(), progress=False)
+    d_err, d_budget = RL.drum_error(drum, torque)
+    d_ctrl = simulate_reel(RL.drum_scene(), defect=DEFECT_SPOOL_UNCOUPLED, progress=False, raise_on_failure=False)
+    dc_err = RL.drum_error(d_ctrl, torque)[0] if d_ctrl.ok else math.inf
+    fric = dict(torque="4 N m", friction=(2.0, 15.0), count=401, duration="6 s", ea_N=1e6)
+    erun = simulate_reel(RL.drum_scene(**fric), progress=False)
+    total, est = RL.spool_energy(erun)
+    scale = float(np.abs(erun.invariants["energy_J"]).max()) + float(erun.reel["spool_kinetic_J"].max())
+    e_bound = 2.0 * est + 100.0 * 1e-10 * scale
+    e_err = float(np.abs(total - total[0]).max())
+    e_ctrl = simulate_reel(RL.drum_scene(**fric), defect=DEFECT_SPOOL_UNCOUPLED, progress=False, raise_on_failure=False)
+    ec_total = RL.spool_energy(e_ctrl)[0] if e_ctrl.ok else None
+    ec_err = float(np.abs(ec_total - ec_total[0]).max()) if ec_total is not None else math.inf
+    trun, om = RL.tension_run()
+    if not trun.ok:
+        raise RuntimeError(f"part G: the tension-law run failed: {trun.message}")
+    tm = RL.tension_measure(trun, om)
+    tctrl, _ = RL.tension_run(DEFECT_TENSION_K2_SIGN)
+    tc = RL.tension_measure(tctrl, om) if tctrl.ok else {"worst": math.inf}
+    roots = ", ".join(f"{z.real:.4f}{z.imag:+.4f}i" for z in tm["roots"])
+    rows = [
+        {"case": "G drum in uniform gravity max |L - l_oracle| over its budget", "value": d_err, "bound": d_budget,
+         "over bound": d_err / d_budget, "unit": "m",
+         "note": f"{float(drum.reel['deployed_length_m'].iloc[-1]):.1f} m out after 10 s"},
+        {"case": "control L'' coupling dropped: the same", "value": dc_err, "bound": d_budget,
+         "over bound": dc_err / d_budget, "unit": "m", "note": "must exceed the bound"},
+        {"case": "G energy with brake and friction, max |E + K_s + W_b + W_loss - (0)|", "value": e_err,
+         "bound": e_bound, "over bound": e_err / e_bound, "unit": "J",
+         "note": f"brake and friction took {float(erun.reel['brake_work_J'].iloc[-1]):.0f} J"},
+        {"case": "control L'' coupling dropped: the same", "value": ec_err, "bound": e_bound,
+         "over bound": ec_err / e_bound, "unit": "J", "note": "must exceed the bound"},
+        {"case": "G tension law: worst relative error of the modes against the roots", "value": tm["worst"],
+         "bound": tm["budget"], "over bound": tm["worst"] / tm["budget"], "unit": "1",
+         "note": f"k1 = 4, k2 = 1; roots {roots} (units of Omega)"},
+        {"case": "control k2 sign flipped: the same", "value": tc["worst"], "bound": tm["budget"],
+         "over bound": tc["worst"] / tm["budget"], "unit": "1", "note": "must exceed the bound"},
+    ]  # fmt: skip
+    weakest = min(dc_err / d_budget, ec_err / e_bound)
+    gates = {
+        "deployment_spool_drum_over_budget": d_err / d_budget,
+        "deployment_spool_energy_over_bound": e_err / e_bound,
+        "deployment_tension_roots_over_budget": tm["worst"] / tm["budget"],
+        "deployment_spool_uncoupled_negative_control": 1.0 / weakest if weakest > 0 else math.inf,
+        "deployment_tension_k2_negative_control": tm["budget"] / tc["worst"] if tc["worst"] > 0 else math.inf,
+    }
+    return rows, gates, {"drum": drum, "torque": torque, "energy": erun, "total": total, "tension": tm,
+                         "tension_ctrl": tc}
+
+
+def part_seds():
+    """H: the SEDS-like deployment to the end of its line (no gate)."""
+    from studies import reel_laws as RL
+
+    run = simulate_reel(RL.seds_scene(), progress=False, raise_on_failure=False)
+    if run.stopped_by != "reel.main.spent":
+        raise RuntimeError(f"part H: the deployment did not reach the end of its line: {run.message}")
+    prof = RL.seds_profile(run)
+    births = sum(c["change"] == "birth" for c in run.changes)
+    rows = [{"case": "H SEDS-like: end of deployment (20 km)", "value": float(prof["t"][-1] / 60.0), "unit": "min",
+             "note": f"swing angle {math.degrees(prof['theta'][-1]):.1f} deg, speed {prof['v'][-1]:.1f} m/s, "
+                     f"tension {prof['T'][-1]:.3f} N at the end; {births} births; no gate"}]  # fmt: skip
+    return rows, {}, prof
+
+
+def spool_figures(out: Path, spool: dict | None, seds: dict | None = None) -> list[str]:
+    """The drum against its oracle and the tension law's perturbation decaying (part G); the
+    SEDS-like swing angle and tension profile (part H)."""
+    if spool is None and seds is None:
+        return []
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = []
+    if spool is not None:
+        from studies import reel_laws as RL
+
+        fig, axes = plt.subplots(1, 2, figsize=(13, 4.2))
+        r = spool["drum"].reel
+        t = r["t_s"].to_numpy()
+        axes[0].plot(t, r["deployed_length_m"], "C0-", label="tetherlab: the spool's L")
+        axes[0].plot(t, RL.drum_oracle(t, spool["torque"]), "k:", label="closed form (11.1)")
+        axes[0].set_xlabel("t (s)")
+        axes[0].set_ylabel("deployed length (m)")
+        axes[0].set_title("G: a drum in uniform gravity, tau = 10 N m")
+        axes[0].legend(fontsize=8)
+        c = spool["tension"]["curves"]
+        axes[1].plot(c["tau"] / (2 * math.pi), c["xi"], "C0-", label="xi = L/l_c - 1")
+        axes[1].plot(c["tau"] / (2 * math.pi), c["theta"], "C1-", label="in-plane angle (rad)")
+        if "curves" in spool["tension_ctrl"]:
+            cc = spool["tension_ctrl"]["curves"]
+            axes[1].plot(cc["tau"] / (2 * math.pi), cc["xi"], "C3--", lw=1, label="control: k2 flipped, xi")
+        axes[1].set_ylim(-0.03, 0.03)
+        axes[1].set_xlabel("t (orbits)")
+        axes[1].set_title("G: the tension law k1 = 4, k2 = 1 about l_c = 1 km")
+        axes[1].legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(out / "deployment_spool.png", dpi=110)
+        plt.close(fig)
+        names.append("deployment_spool.png")
+    if seds is not None:
+        fig, axes = plt.subplots(1, 2, figsize=(13, 4.2))
+        tm = seds["t"] / 60.0
+        axes[0].plot(tm, np.degrees(seds["theta"]), "C0-", label="in-plane swing angle")
+        axes[0].set_xlabel("t (min)")
+        axes[0].set_ylabel("swing angle from the local vertical (deg)", color="C0")
+        ax2 = axes[0].twinx()
+        ax2.plot(tm, seds["L"] / 1e3, "C1-", label="deployed length")
+        ax2.set_ylabel("deployed length (km)", color="C1")
+        axes[0].set_title("H: SEDS-like deployment, 20 km through a friction brake")
+        axes[1].plot(tm, seds["T"], "C2-", label="tension at the exit")
+        axes[1].set_xlabel("t (min)")
+        axes[1].set_ylabel("tension (N)", color="C2")
+        ax3 = axes[1].twinx()
+        ax3.plot(tm, seds["v"], "C3-", label="deployment speed")
+        ax3.set_ylabel("deployment speed (m/s)", color="C3")
+        axes[1].set_title("H: tension and speed profile")
+        fig.tight_layout()
+        fig.savefig(out / "deployment_seds.png", dpi=110)
+        plt.close(fig)
+        names.append("deployment_seds.png")
+    return names
+
+
 # -- report --------------------------------------------------------------------------------------
 # -- G: rod-count convergence and the birth bounds ------------------------------------------------
 CONV_RODS_M = (1000.0, 500.0, 250.0, 125.0)
@@ -621,7 +761,9 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "(the adiabatic invariant). Part H pays out from a reel on a spinning rigid hub with a wheel, "
         "the stored tether a spool in the hub's mass, centre of mass and inertia (docs/deployment.md 9): "
         "the total angular momentum, momentum and energy balance under three laws, and what the hub's "
-        "attitude does.",
+        "attitude does. Part I checks the reel as a dynamical system: a drum in uniform gravity "
+        "against the closed form, the energy balance with a brake and friction, and the tension law's "
+        "closed-loop modes against the roots of its characteristic polynomial (docs/deployment.md 10-11).",
         "",
         "**What the numbers mean.** 'over bound' is the measured error divided by its budget "
         "(docs/deployment.md 8; references/gates.toml gives each budget and its source): below 1 passes. "
@@ -646,7 +788,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir", type=Path)
     ap.add_argument("--quiet", action="store_true")
-    ap.add_argument("--parts", default="ABCDEFGH", help="parts to run (A and C run together)")
+    ap.add_argument("--parts", default="ABCDEFGHIJ", help="parts to run (A and C run together)")
     args = ap.parse_args(argv)
     out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
@@ -683,13 +825,17 @@ def main(argv=None) -> int:
         run_part("G", part_convergence)
     if "H" in args.parts:
         run_part("H", part_hub)
+    if "I" in args.parts:
+        run_part("I", part_spool)
+    if "J" in args.parts:
+        run_part("J", part_seds)
     free = found.get("A+C")
     if free is not None:
         # the L/N control's weakest failure over A, C and D (measured / bound): the gate reads
         # bound / measured, <= 1 when it failed every gate it must
         control = min(free["control"], found["D"]) if found.get("D") is not None else free["control"]
         gates["deployment_rescaled_negative_control"] = 1.0 / control if control > 0 else math.inf
-    figs = figures(out, free, found.get("E"), found.get("F"))
+    figs = figures(out, free, found.get("E"), found.get("F")) + spool_figures(out, found.get("I"), found.get("J"))
     figs += hub_figures(out, found.get("H"))
     summary = {"gates": gates, "failures": failures, "wall_s": walls}
     (out / "deployment_summary.json").write_text(json.dumps(summary, indent=1) + "\n")

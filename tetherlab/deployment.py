@@ -59,6 +59,8 @@ def check_law(scene, duration_s: float) -> None:
         r = t.reel
         path = f"tethers.{t.name}.reel"
         line = t.length_m + r.stored_length_m
+        if r.spool is not None:  # its length is state: the kernel stops a run that spends the line
+            continue
         if r.law == "table":
             if r.times_s[-1] < duration_s:
                 raise SceneError(f"{path}.times", f"a table reaching the end of the run ({duration_s:.6g} s)",
@@ -84,6 +86,8 @@ def check_law(scene, duration_s: float) -> None:
 def next_change(reel, length0_m: float, rods: int, t_a: float, t_end: float):
     """The first time after t_a when the first rod reaches a bound: (t, kind) with kind 'birth',
     'retire' or 'retrieved' (the last rod below the retirement bound), or (inf, None)."""
+    if reel.spool is not None:  # a spool law's births and retirements are located events of the run
+        return (math.inf, None)
     fixed = (rods - 1) * reel.rod_length_m
     targets = [(fixed + reel.birth_length_m, "birth")]
     targets.append((fixed + reel.retire_length_m, "retire" if rods > 1 else "retrieved"))
@@ -133,7 +137,7 @@ def reel_start(model, y0: np.ndarray) -> np.ndarray:
             y[lay.rod_rate(g)] = Sd * lengths[g] / L / (2 * SQ3)
         eps = float(np.linalg.norm(S)) / L - 1.0
         u = S / np.linalg.norm(S)
-        if int(rv.law) == REEL_LAW_CONSTANT:
+        if int(rv.law) == REEL_LAW_CONSTANT or int(rv.state_offset) >= 0:  # a spool law: L'(0)
             speed = rv.speed_m_s
         elif int(rv.law) == REEL_LAW_TABLE:
             speed = float(model.p[int(rv.table_offset) + 2])  # a1 of the first interval: L'(0)
@@ -221,6 +225,28 @@ def _with_rods(lay_old, lay_new, y, g0, n_out, rods_in) -> np.ndarray:
     return z
 
 
+def _kernel_index(prep, name: str) -> int:
+    return [x.name for x in prep.model.tethers].index(name)
+
+
+def _deployed(tether, prep, y_end, t_s: float) -> float:
+    """The deployed length of a reel tether at the end of a phase: its law's, or its state's."""
+    if tether.reel.spool is not None:
+        return float(y_end[prep.model.state.spool_of(_kernel_index(prep, tether.name))][0])
+    return length_at(tether.reel, tether.length_m, t_s)
+
+
+def _spool_change(stopped_by, tethers):
+    """(tether, 'birth' | 'retire') when a spool law's located event ended the phase, else None."""
+    if not stopped_by or not stopped_by.startswith("reel."):
+        return None
+    name, kind = stopped_by[len("reel."):].rsplit(".", 1)
+    for t in tethers:
+        if t.name == name and kind in ("birth", "retire"):
+            return t, kind
+    return None
+
+
 def _rows(model, t, Y):
     """The reel table and the material invariants of a phase's rows."""
     from .tether.reel_diagnostics import R_NCOL, reel_rows
@@ -230,7 +256,7 @@ def _rows(model, t, Y):
     out = np.full((len(t), nreel, R_NCOL), np.nan)
     lay = model.state
     acc = np.zeros(lay.n_qt)
-    datt = np.zeros(lay.n_attitude + lay.n_wheels)
+    datt = np.zeros(lay.first_order.stop - lay.first_order.start)
     bad = reel_rows(np.ascontiguousarray(t, float), np.ascontiguousarray(Y, float), p, out, acc, datt)
     d = diag.compute(model, t, Y)
     return out, d, bad
@@ -308,11 +334,17 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
         inv["energy_J"] = g[:, diag.G_E] + corr[:, 6]
         inv["exit_power_W"] = out[:, :, 7].sum(axis=1)
         inv_parts.append(pd.DataFrame(inv))
-        if res.status != 0 or res.stopped_by is not None:
+        spool_change = _spool_change(stats.get("stopped_by"), tethers) if res.status == 0 else None
+        if spool_change is not None:  # a spool law's first rod reached a bound: located, the phase ends there
+            t_b = float(res.t[-1])
+            nxt = (t_b, spool_change[1], spool_change[0])
+            if spool_change[1] == "retire" and state[spool_change[0].name] == 1:
+                nxt = (t_b, "retrieved", spool_change[0])
+        elif res.status != 0 or res.stopped_by is not None:
             status, message = res.status, msg
             stopped = stats.get("stopped_by")
             break
-        if nxt[1] is None or t_b >= t_end:
+        if nxt[1] is None or (t_b >= t_end and spool_change is None):
             break
         if nxt[1] == "knot":  # the same model goes on from the knot
             y = res.y_end
@@ -325,8 +357,11 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
         n = state[t.name]
         lay_old = prep.model.state
         g0 = prep.model.rod_slices[[x.name for x in prep.model.tethers].index(t.name)].start
-        L = length_at(reel, t.length_m, t_b)
-        speed = speed_at(reel, t.length_m, t_b)
+        if reel.spool is not None:  # its length and rate are state
+            L, speed = (float(x) for x in res.y_end[prep.model.state.spool_of(_kernel_index(prep, t.name))])
+        else:
+            L = length_at(reel, t.length_m, t_b)
+            speed = speed_at(reel, t.length_m, t_b)
         if nxt[1] == "retrieved":
             stopped = f"reel.{t.name}.retrieved"
             message = (f"run stopped at t = {t_b:.9g} s: the tether {t.name!r} was retrieved to its last rod's "
@@ -337,7 +372,7 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
         n_new = n + 1 if nxt[1] == "birth" else n - 1
         state[t.name] = n_new
         nxt_prep = prepare(scene, reel_phase={"first": prep0, "rods": {
-            x.name: (state[x.name], length_at(x.reel, x.length_m, t_b)) for x in tethers}})  # fmt: skip
+            x.name: (state[x.name], _deployed(x, prep, res.y_end, t_b)) for x in tethers}})  # fmt: skip
         lay_new = nxt_prep.model.state
         y_end = res.y_end
         if nxt[1] == "birth":
@@ -380,6 +415,16 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
             vals[j] = c
         carnot[part.index.to_numpy()] = vals
     reel_df["carnot_J"] = carnot
+    # a spool law's brake work and exit loss, integrated as the exit work (docs/deployment.md 10.3)
+    for col, power in (("brake_work_J", "brake_power_W"), ("exit_loss_J", "exit_loss_power_W")):
+        vals = np.zeros(len(reel_df))
+        for name, part in reel_df.groupby("reel", sort=False):
+            tt, pw, phs = (part[c].to_numpy() for c in ("t_s", power, "phase"))
+            acc_ = np.zeros(len(part))
+            for j in range(1, len(part)):
+                acc_[j] = acc_[j - 1] + (0.5 * (pw[j] + pw[j - 1]) * (tt[j] - tt[j - 1]) if phs[j] == phs[j - 1] else 0.0)
+            vals[part.index.to_numpy()] = acc_
+        reel_df[col] = vals
     result = DeploymentResult(phases, reel_df, inv_df, changes, status, message, stopped)
     if status != 0 and raise_on_failure:
         raise SimulationError(message, phases[-1])

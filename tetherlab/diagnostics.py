@@ -178,7 +178,7 @@ def compute(model, ts: np.ndarray, Y: np.ndarray, spans=None) -> dict:
     wheels = np.full((nrows, nw, 2), np.nan)
     lay = model.state
     acc = np.zeros(lay.n_qt)
-    datt = np.zeros(lay.n_attitude + lay.n_wheels)
+    datt = np.zeros(lay.first_order.stop - lay.first_order.start)
     ts = np.ascontiguousarray(ts, float)
     Y = np.ascontiguousarray(Y, float)
     if nrows and spans is None:
@@ -205,7 +205,7 @@ def shares(model, t: float, y: np.ndarray) -> np.ndarray:
     lay = model.state
     y = np.ascontiguousarray(y, float)
     acc = np.zeros(lay.n_qt)
-    datt = np.zeros(lay.n_attitude + lay.n_wheels)
+    datt = np.zeros(lay.first_order.stop - lay.first_order.start)
     q, qd, att = y[lay.q], y[lay.qd], y[lay.first_order]
     code = system_accelerations(float(t), q, qd, att, p, acc, datt)
     if code != 0:

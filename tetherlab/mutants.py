@@ -361,6 +361,25 @@ MUTANTS = {
             mutate=_flag(L.DEFECT_REEL_NO_RING),
             path="reel",
         ),
+        Mutant(
+            "spool_uncoupled",
+            "the spool's L'' solved with the exit tension taken at L'' = 0 (its coupling through the first "
+            "rod's apparent load dropped)",
+            "tether/reel_spool.py (p[H_MUTANT] = DEFECT_SPOOL_UNCOUPLED)",
+            "docs/deployment.md 10.2 (the exit tension is affine in L'')",
+            ("deployment_spool_drum_over_budget", "deployment_spool_uncoupled_negative_control"),
+            mutate=_flag(L.DEFECT_SPOOL_UNCOUPLED),
+            path="reel",
+        ),
+        Mutant(
+            "tension_k2_flipped",
+            "the tension law with the sign of its rate gain k2 flipped",
+            "tether/reel_spool.py (p[H_MUTANT] = DEFECT_TENSION_K2_SIGN)",
+            "docs/deployment.md 11.3 (the characteristic polynomial)",
+            ("deployment_tension_roots_over_budget", "deployment_tension_k2_negative_control"),
+            mutate=_flag(L.DEFECT_TENSION_K2_SIGN),
+            path="reel",
+        ),
     )
 }
 

@@ -156,6 +156,7 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
                 t.mass_kg / t.length_m, t.length_m + t.reel.stored_length_m, _reel_table(t.reel),
                 spool_radius_m=t.reel.spool_radius_m,
                 spool_axis=t.reel.spool_axis or t.reel.exit_direction or (0.0, 0.0, 0.0),
+                **_spool_spec(t.reel),
             ),
         ))  # fmt: skip
     nq = tethers[0].quadrature if tethers else 2  # one for every tether (checked at load)
@@ -309,6 +310,20 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
         t0_s=t0,
         ref_r_m=np.asarray(r_ref, float),
         ref_v_m_s=np.asarray(v_ref, float),
+    )
+
+
+def _spool_spec(reel) -> dict:
+    """The ReelSpec fields of a spool or tension law (tether/reel_spool.py), SI."""
+    sp = reel.spool
+    if sp is None:
+        return {}
+    return dict(
+        spool_mass_kg=sp.spool_inertia_kg_m2 / sp.drum_radius_m**2 if sp.spool_inertia_kg_m2 > 0.0 else 0.0,
+        radius_m=sp.drum_radius_m, torque_N_m=sp.torque_N_m, viscous_N_s_m=sp.viscous_N_s_m, coulomb_N=sp.coulomb_N,
+        friction_speed_m_s=sp.friction_speed_m_s, mstar_kg=sp.reduced_mass_kg, omega_rad_s=sp.orbit_rate_rad_s,
+        lc_m=sp.commanded_length_m, k1=sp.k1, k2=sp.k2, tmin_N=sp.min_tension_N, tmax_N=sp.max_tension_N,
+        twidth_N=sp.limit_width_N, birth_length_m=reel.birth_length_m, retire_length_m=reel.retire_length_m,
     )
 
 

@@ -48,6 +48,24 @@ class ReelSpec:
     # a canister's is its exit direction), centred at the exit (docs/deployment.md 9)
     spool_radius_m: float = 0.0
     spool_axis: tuple = (0.0, 0.0, 0.0)
+    # laws "spool" and "tension" (tether/reel_spool.py): speed_m_s is L'(0); the spool and its friction
+    spool_mass_kg: float = 0.0  # J/R^2
+    radius_m: float = 0.0
+    torque_N_m: float = 0.0  # positive hauling in
+    viscous_N_s_m: float = 0.0
+    coulomb_N: float = 0.0
+    friction_speed_m_s: float = 1.0
+    # law "tension": T_c = m* Omega^2 [3 l_c + k1 (L - l_c) + k2 L'/Omega], smoothly limited
+    mstar_kg: float = 0.0
+    omega_rad_s: float = 0.0
+    lc_m: float = 0.0
+    k1: float = 0.0
+    k2: float = 0.0
+    tmin_N: float = 0.0
+    tmax_N: float = 0.0
+    twidth_N: float = 0.0  # 0: no limits
+    birth_length_m: float = 0.0  # the first rod's bounds: located events under a spool law
+    retire_length_m: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -344,7 +362,7 @@ def build_model(
         tv.part = tether_part_of(t).code  # the TT_PART slot the tether dispatcher reads
         rod_slices.append(slice(g, g + t.rods))
         if t.reel is not None:
-            _write_reel(v, reels.index(k), k, index[t.parent], g, t, bodies[index[t.parent]].mass_kg)
+            _write_reel(v, reels.index(k), k, index[t.parent], g, t, bodies[index[t.parent]].mass_kg, state)
         for j in range(t.rods):
             rv = v.rod(g)
             if t.reel is not None:  # the first rod varies, the others are full rods (docs/deployment.md)
@@ -458,14 +476,23 @@ def build_model(
     return model
 
 
-def _write_reel(v, i: int, k: int, body: int, g0: int, t: TetherSpec, body_mass_kg: float) -> None:
+def _write_reel(v, i: int, k: int, body: int, g0: int, t: TetherSpec, body_mass_kg: float, layout) -> None:
     """Reel i's row of the block (tether/reel.py reads it every evaluation)."""
     r = t.reel
     rv = v.reel(i)
     rv.tether = k
     rv.body = body
     rv.rod = g0
-    rv.law = {"constant": P.REEL_LAW_CONSTANT, "exponential": P.REEL_LAW_EXPONENTIAL, "table": P.REEL_LAW_TABLE}[r.law]
+    rv.law = {"constant": P.REEL_LAW_CONSTANT, "exponential": P.REEL_LAW_EXPONENTIAL, "table": P.REEL_LAW_TABLE,
+              "spool": P.REEL_LAW_SPOOL, "tension": P.REEL_LAW_TENSION}[r.law]  # fmt: skip
+    # a spool law's [L, L'] in the first-order block the kernel gets (tether/reel.py reads it there)
+    rv.state_offset = layout.spool_of(k).start - layout.first_order.start if k in layout.spools else -1
+    for name in ("spool_mass_kg", "radius_m", "torque_N_m", "viscous_N_s_m", "coulomb_N", "friction_speed_m_s",
+                 "mstar_kg", "omega_rad_s", "lc_m", "k1", "k2", "tmin_N", "tmax_N"):
+        setattr(rv, name, getattr(r, name))
+    rv.twidth_N = r.twidth_N
+    rv.birth_m = r.birth_length_m
+    rv.retire_m = r.retire_length_m
     rv.exit = {"canister": P.REEL_EXIT_CANISTER, "drum": P.REEL_EXIT_DRUM}[r.exit]
     rv.length0_m = r.length0_m
     rv.speed_m_s = r.speed_m_s
@@ -532,7 +559,11 @@ def attitude_block(model: Model, states: dict) -> np.ndarray:
         out.extend(wb)
         for w in model.bodies[b].rigid.wheels:
             wheels.append(w.inertia_kg_m2 * (float(np.dot(w.axis, wb)) + w.speed_rad_s))
-    return np.array(out + wheels, float)
+    spools = []  # a spool-law reel's [L, L'] at the model's start
+    for k in model.state.spools:
+        r = model.tethers[k].reel
+        spools.extend([model.tethers[k].length_m, r.speed_m_s])
+    return np.array(out + wheels + spools, float)
 
 
 def _state_parts(model: Model, y: np.ndarray):
@@ -613,6 +644,9 @@ def tolerance_scales(model: Model, ref_length_m: float, ref_time_s: float) -> np
         att.extend([1.0] * 4 + [1.0 / ref_time_s] * 3)
         for w in model.bodies[b].rigid.wheels:
             wheels.append(w.inertia_kg_m2 * max(1.0 / ref_time_s, abs(w.speed_rad_s), w.max_speed_rad_s))
+    for k in lay.spools:  # a spool's length and rate on the scale of its tether
+        att_len = model.tethers[k].reel.line_length_m
+        wheels.extend([att_len, att_len / ref_time_s])
     s[lay.first_order] = np.array(att + wheels, float)
     return s
 

@@ -12,6 +12,10 @@ so no step ever straddles a kink.  Components, in this order (see :func:`event_c
 * one per rod of every inextensible tether (terminal): its tension multiplier lambda
   (tether/inextensible.py), from one evaluation of the right-hand side at (t, y).  The model
   holds only while it is positive: the run stops where a rod would go slack;
+* three per reel under a spool law (terminal): its first rod's length at the birth bound and at
+  the retirement bound (``reel.<tether>.birth``, ``reel.<tether>.retire``: the phase of the
+  deployment ends there, tetherlab/deployment.py), and the whole line paid out
+  (``reel.<tether>.spent``: the run ends there, the end of the deployment);
 * with the Cowell formulation (header H_EV_WHEELS), per wheel with a ``max_torque`` the torque
   limit max_torque - |command| and per wheel with a ``max_speed`` the speed cut-off
   (bodies/wheels.py::limit_events): negative while the limit acts, so saturation entered and left
@@ -48,8 +52,16 @@ from .layout import (
     H_NQT,
     H_LEN,
     H_NSTATE,
+    H_NREEL,
     H_NTETH,
+    H_OFF_REEL,
     H_OFF_ROD,
+    RL_FIXED,
+    RL_LBIRTH,
+    RL_LINE,
+    RL_LRETIRE,
+    RL_SIZE,
+    RL_SOFF,
     H_OFF_TETH,
     RT_D,
     RT_EA,
@@ -108,6 +120,7 @@ def event_values(t, y, g_ptr, p):
         if int(p[offt + tt * TT_SIZE + TT_MODEL]) == MODEL_INEXT:
             inext = True
     if p[H_EV_WHEELS] != 0.0 or inext:
+        nw = int(p[H_NWHEEL])
         acc = np.empty(h)
         datt = np.empty(n - 2 * h)
         code = system_accelerations(t, y[:h], y[h : 2 * h], y[2 * h : n], p, acc, datt)
@@ -123,6 +136,16 @@ def event_values(t, y, g_ptr, p):
             for g in range(g0, g0 + int(p[tb + TT_NRODS])):
                 g_ptr[k] = p[scr + g * SR_SIZE + SR_FE]
                 k += 1
+    for i in range(int(p[H_NREEL])):  # a spool law's first rod at its birth and retirement bounds
+        rb = int(p[H_OFF_REEL]) + i * RL_SIZE
+        so = int(p[rb + RL_SOFF])
+        if so < 0:
+            continue
+        l = y[2 * h + so] - p[rb + RL_FIXED]
+        g_ptr[k] = l - p[rb + RL_LBIRTH]
+        g_ptr[k + 1] = l - p[rb + RL_LRETIRE]
+        g_ptr[k + 2] = p[rb + RL_LINE] - y[2 * h + so]
+        k += 3
     if p[H_EV_WHEELS] != 0.0:
         nw = int(p[H_NWHEEL])
         wscr = int(p[H_OFF_BSCR]) + int(p[H_NBODY]) * BS_SIZE + int(p[H_NTETH]) * TS_SIZE
@@ -162,6 +185,10 @@ def event_components(model, stop_radius_m: float = 0.0, wheel_limits: bool = Fal
             for i in range(sl.stop - sl.start):
                 names.append(f"inextensible.{t.name}.rod{i + 1}")
                 terminal.append(True)
+    for k in model.state.spools:  # terminal: a birth or retirement ends the phase (deployment.py)
+        n = model.tethers[k].name
+        names.extend([f"reel.{n}.birth", f"reel.{n}.retire", f"reel.{n}.spent"])
+        terminal.extend([True, True, True])
     if wheel_limits:
         for b in model.bodies:  # kernel body order, wheels in file order: the wheel table's order
             rig = getattr(b, "rigid", None)

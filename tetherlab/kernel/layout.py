@@ -36,6 +36,8 @@ DEFECT_REEL_NO_LDOT = 24          # the strain rate of the rod at a reel without
 DEFECT_REEL_FROZEN = 25           # the kernel ignores the reel's law: L stays L0 (tether/reel.py)
 DEFECT_REEL_NO_EXIT_TORQUE = 26   # a reel on a rigid body without the torque of the exit's momentum flux (tether/reel_hub.py)
 DEFECT_REEL_NO_RING = 27          # a reel on a rigid body without the ring's angular momentum left in the body (tether/reel_hub.py)
+DEFECT_SPOOL_UNCOUPLED = 28       # the spool's L'' solved with the exit tension at L'' = 0 (tether/reel_spool.py)
+DEFECT_TENSION_K2_SIGN = 29       # the tension law with the sign of its rate gain k2 flipped (tether/reel_spool.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 
@@ -57,12 +59,14 @@ FAIL_ROD_COLLAPSE = 11   # a rod shortened below H_MIN_STRAIN (length -> 0: the 
 FAIL_NONFINITE = 12      # a non-finite force or acceleration
 FAIL_SINGULAR = 13       # the reaction system could not be solved
 FAIL_REEL_EMPTY = 14     # the variable rod at a reel reached zero length (retrieved past its end)
+FAIL_REEL_SPENT = 15     # a spool law paid out so far beyond the whole line that its body's mass is gone
 
 FAIL_TEXT = {
     FAIL_ROD_COLLAPSE: "rod collapsed (its length went to zero or below the minimum strain)",
     FAIL_NONFINITE: "non-finite force or acceleration",
     FAIL_SINGULAR: "singular reaction system",
     FAIL_REEL_EMPTY: "the rod at the reel was retrieved to zero length",
+    FAIL_REEL_SPENT: "a reel paid out beyond its whole line (its body's mass with the stored tether at or below zero)",
 }
 
 # part kind of each body (bodies/parts.py dispatches every part function on it); the code lives in
@@ -73,6 +77,8 @@ BT_PART = BT_RIGID
 REEL_LAW_CONSTANT = 1     # L = L0 + v t
 REEL_LAW_EXPONENTIAL = 2  # L = L0 exp(r t)
 REEL_LAW_TABLE = 3        # L(t) a natural cubic spline through a table (C2: L'' continuous)
+REEL_LAW_SPOOL = 4        # L, L' state: the spool's balance with a torque and friction (tether/reel_spool.py)
+REEL_LAW_TENSION = 5      # L, L' state: the spool's torque sets the commanded tension (tether/reel_spool.py)
 REEL_EXIT_CANISTER = 1    # material at rest in the body: a jump of rho L'^2 and the Carnot loss
 REEL_EXIT_DRUM = 2        # material already at rim speed: no jump at the exit
 

@@ -156,7 +156,7 @@ ROD = Record("rod", "RT_", 8, (
        doc="inextensible tethers: Baumgarte rate a of its length constraint, phi'' + 2a phi' + a^2 phi = 0"),
 ))
 
-REEL = Record("reel", "RL_", 20, (
+REEL = Record("reel", "RL_", 36, (
     _i("tether", "RL_TETH", "tether it pays out (at its end A_1)"),
     _i("body", "RL_BODY", "body carrying it (kernel order): the tether's parent"),
     _i("rod", "RL_ROD", "global index of the variable rod next to the reel (the tether's first)"),
@@ -173,6 +173,24 @@ REEL = Record("reel", "RL_", 20, (
     _i("table_intervals", "RL_TN", "table law: number of intervals"),
     _f("spool_radius_m", "RL_SPR", unit="m", doc="rigid body: radius of the spool (a thin ring at the reel point)"),
     _f("spool_axis", "RL_AX", 3, doc="rigid body: the spool's axis, body axes, unit (a drum turns +L'/radius about it)"),
+    # the spool laws (L and L' in the state; tether/reel_spool.py, docs/deployment.md 10)
+    _i("state_offset", "RL_SOFF", "spool laws: offset of [L, L'] in the first-order block (-1: a prescribed law)"),
+    _f("spool_mass_kg", "RL_MEFF", unit="kg", doc="J/R^2 of the drum (0 on a canister)"),
+    _f("radius_m", "RL_R", unit="m", doc="drum radius R (the torque's arm)"),
+    _f("torque_N_m", "RL_TAU", unit="N m", doc="constant torque on the spool, positive hauling in"),
+    _f("viscous_N_s_m", "RL_CV", unit="N s/m", doc="viscous friction c: force c L' against the pay-out"),
+    _f("coulomb_N", "RL_FC", unit="N", doc="Coulomb friction F_c tanh(L'/v_s) against the pay-out"),
+    _f("friction_speed_m_s", "RL_VS", unit="m/s", doc="v_s of the Coulomb friction's smooth sign"),
+    _f("mstar_kg", "RL_MSTAR", unit="kg", doc="tension law: the reduced mass m*"),
+    _f("omega_rad_s", "RL_OMEGA", unit="rad/s", doc="tension law: the orbit rate Omega"),
+    _f("lc_m", "RL_LC", unit="m", doc="tension law: the commanded length l_c"),
+    _f("k1", "RL_K1", doc="tension law: gain on l - l_c"),
+    _f("k2", "RL_K2", doc="tension law: gain on l'/Omega"),
+    _f("tmin_N", "RL_TMIN", unit="N", doc="tension law: the smooth lower limit of the commanded tension"),
+    _f("tmax_N", "RL_TMAX", unit="N", doc="tension law: the smooth upper limit (0: none)"),
+    _f("twidth_N", "RL_TW", unit="N", doc="tension law: the width of the limits' smooth corner"),
+    _f("birth_m", "RL_LBIRTH", unit="m", doc="spool laws: the first rod's birth bound (a located event)"),
+    _f("retire_m", "RL_LRETIRE", unit="m", doc="spool laws: the first rod's retirement bound (a located event)"),
 ))
 
 EFFECT = Record("effect", "ET_", 4, (
@@ -223,7 +241,7 @@ JOINT_SCRATCH = Record("joint_scratch", "SJ_", 15, (
     _f("sinv", "SJ_SINV", 9), _f("s", "SJ_S", 3), _f("j_N", "SJ_J", 3, "N", "joint reaction"),
 ))
 
-REEL_SCRATCH = Record("reel_scratch", "RS_", 8, (
+REEL_SCRATCH = Record("reel_scratch", "RS_", 16, (
     _f("length_m", "RS_L", unit="m", doc="deployed unstretched length L(t)"),
     _f("speed_m_s", "RS_LD", unit="m/s", doc="dL/dt"),
     _f("accel_m_s2", "RS_LDD", unit="m/s^2", doc="d2L/dt2"),
@@ -231,6 +249,12 @@ REEL_SCRATCH = Record("reel_scratch", "RS_", 8, (
     _f("lambda_1_s", "RS_LAM", unit="1/s", doc="dl/dt / l"),
     _f("kappa_1_s2", "RS_KAP", unit="1/s^2", doc="d(lambda)/dt - lambda^2 = l''/l - 2 (l'/l)^2"),
     _f("jump_N", "RS_JUMP", unit="N", doc="momentum flux through the exit, rho L'^2 (1 + eps)"),
+    _f("torque_N_m", "RS_TAU", unit="N m", doc="spool laws: torque of the brake or motor, positive hauling in"),
+    _f("friction_N", "RS_FR", unit="N", doc="spool laws: friction force against the pay-out"),
+    _f("brake_force_N", "RS_FB", unit="N", doc="spool laws: torque/R + friction, the force holding the line back"),
+    _f("command_N", "RS_TCMD", unit="N", doc="tension law: the commanded exit tension"),
+    _f("spool_mass_kg", "RS_MEFF", unit="kg", doc="spool laws: J/R^2 + rho (stored) on a drum, 0 on a canister"),
+    _f("exit_tension_N", "RS_TEX", unit="N", doc="spool laws: the line's tension at the exit, -J_0.u"),
 ))
 
 RECORDS = (TETHER, BODY, WHEEL, ROD, EFFECT, REEL, BODY_SCRATCH, TETHER_SCRATCH, WHEEL_SCRATCH, ROD_SCRATCH,

@@ -14,7 +14,9 @@ block              what                                        where (n = n_qt)
 ``roots.v``        the other roots' velocities (m/s)           ``[n + 3 + 3 N, 2 n)``
 ``attitude.B``     rigid body B: quaternion (w, x, y, z, body  7 each, kernel body order, from
                    -> inertial) and omega (rad/s, body axes)   ``2 n``
-``wheels``         every wheel's axial momentum (N m s)        the last ``n_wheels``
+``wheels``         every wheel's axial momentum (N m s)        ``n_wheels`` after the attitudes
+``reel.T``         a spool-law reel on tether T: its deployed   2 each, after the wheels
+                   length L (m) and dL/dt (m/s)
 =================  ==========================================  =================================
 
 The compiled kernels read the same offsets from the parameter block (header H_NQT, H_NSTATE,
@@ -32,6 +34,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+#: Reel laws whose length is state (tether/reel_spool.py): the rest prescribe L(t).
+SPOOL_LAWS = ("spool", "tension")
 
 
 @dataclass(frozen=True)
@@ -56,7 +61,9 @@ class StateLayout:
     """Named blocks of a Cowell state (see the module docstring).
 
     ``rods``: rods per tether (kernel order); ``other_roots``: kernel indices of the roots after
-    root 0; ``rigid``: (kernel body index, number of wheels) of every rigid body, kernel order.
+    root 0; ``rigid``: (kernel body index, number of wheels) of every rigid body, kernel order;
+    ``spools``: kernel indices of the tethers whose reel's length is state (a spool law,
+    tether/reel_spool.py), in reel order.
     """
 
     rods: tuple[int, ...]
@@ -64,6 +71,7 @@ class StateLayout:
     rigid: tuple[tuple[int, int], ...] = ()
     tether_names: tuple[str, ...] = ()
     body_names: tuple[str, ...] = ()
+    spools: tuple[int, ...] = ()
 
     # -- sizes ---------------------------------------------------------------------------------
     @property
@@ -84,8 +92,12 @@ class StateLayout:
         return sum(nw for _, nw in self.rigid)
 
     @property
+    def n_spool_states(self) -> int:
+        return 2 * len(self.spools)
+
+    @property
     def size(self) -> int:
-        return 2 * self.n_qt + self.n_attitude + self.n_wheels
+        return 2 * self.n_qt + self.n_attitude + self.n_wheels + self.n_spool_states
 
     @property
     def has_attitude(self) -> bool:
@@ -118,7 +130,8 @@ class StateLayout:
 
     @property
     def first_order(self) -> slice:
-        """The attitude and wheel blocks (first order; empty for point masses)."""
+        """The attitude, wheel and spool blocks (first order; empty for point masses without a
+        spool-law reel)."""
         return slice(2 * self.n_qt, self.size)
 
     @property
@@ -127,7 +140,18 @@ class StateLayout:
 
     @property
     def wheels(self) -> slice:
-        return slice(2 * self.n_qt + self.n_attitude, self.size)
+        a = 2 * self.n_qt + self.n_attitude
+        return slice(a, a + self.n_wheels)
+
+    @property
+    def spool_states(self) -> slice:
+        """Every spool-law reel's [L, L'] (2 each, reel order)."""
+        return slice(self.size - self.n_spool_states, self.size)
+
+    def spool_of(self, k: int) -> slice:
+        """[L, L'] of the spool-law reel paying out tether k (kernel index)."""
+        a = self.spool_states.start + 2 * self.spools.index(k)
+        return slice(a, a + 2)
 
     def rod(self, g: int) -> slice:
         """d_g of global rod g (tethers in kernel order, rods from the root side)."""
@@ -202,6 +226,9 @@ class StateLayout:
             if nw:
                 sl = self.wheels_of(b)
                 out.append(Block(f"wheels.{self._bname(b)}", sl.start, sl.stop))
+        for k in self.spools:
+            sl = self.spool_of(k)
+            out.append(Block(f"reel.{self._tname(k)}", sl.start, sl.stop))
         return tuple(blk for blk in out if blk.size > 0)
 
     def block(self, name: str) -> slice:
@@ -257,6 +284,8 @@ class StateLayout:
             rigid=rigid,
             tether_names=tuple(t.name for t in tethers),
             body_names=tuple(b.name for b in bodies),
+            spools=tuple(k for k, t in enumerate(tethers) if getattr(t, "reel", None) is not None
+                         and t.reel.law in SPOOL_LAWS),  # fmt: skip
         )
 
     def agrees_with(self, p: np.ndarray) -> list[str]:

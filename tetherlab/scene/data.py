@@ -200,7 +200,7 @@ class InitialShape:
         return tuple(self.theta_rad), tuple(self.phi_rad)
 
 
-REEL_LAWS = ("constant", "exponential", "table")
+REEL_LAWS = ("constant", "exponential", "table", "spool", "tension")
 REEL_EXITS = ("canister", "drum")
 
 
@@ -228,6 +228,30 @@ class Reel:
     exit_direction: Vector3 | None = None  # unit
     spool_radius_m: float = 0.0
     spool_axis: Vector3 | None = None  # unit; a canister's is its exit direction
+    spool: "SpoolLaw | None" = None  # laws 'spool' and 'tension': L and L' are state (speed_m_s is L'(0))
+
+
+@dataclass(frozen=True)
+class SpoolLaw:
+    """The reel as a dynamical system (docs/deployment.md 10): the spool (a drum: inertia J and
+    radius R; a canister: no inertia), a torque (positive hauling in) or the tension law's
+    command, viscous and Coulomb friction against the pay-out."""
+
+    spool_inertia_kg_m2: float = 0.0
+    drum_radius_m: float = 0.0
+    torque_N_m: float = 0.0
+    viscous_N_s_m: float = 0.0
+    coulomb_N: float = 0.0
+    friction_speed_m_s: float = 0.01
+    # law 'tension': T_c = m* Omega^2 [3 l_c + k1 (L - l_c) + k2 L'/Omega]
+    reduced_mass_kg: float = 0.0
+    orbit_rate_rad_s: float = 0.0
+    commanded_length_m: float = 0.0
+    k1: float = 0.0
+    k2: float = 0.0
+    min_tension_N: float = 0.0
+    max_tension_N: float = 0.0
+    limit_width_N: float = 0.0  # 0: no limits
 
 
 @dataclass(frozen=True)

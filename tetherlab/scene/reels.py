@@ -9,12 +9,20 @@ import math
 from typing import Any
 
 from ..errors import SceneError
-from ..units import LENGTH, RATE, SPEED, TIME, shown
-from .data import REEL_EXITS, REEL_LAWS, Reel
+from ..units import ANGULAR_RATE, FORCE, LENGTH, MASS, MOMENT_OF_INERTIA, RATE, SPEED, TIME, TORQUE, Kind, shown
+from .data import REEL_EXITS, REEL_LAWS, Reel, SpoolLaw
 from .keys import _choice, _number, _quantity, _required, _table, _vector
 
+#: the spool laws' keys (docs/deployment.md 10, docs/scenes.md)
+_SPOOL_KEYS = ("spool_inertia", "drum_radius", "torque", "viscous_friction", "coulomb_friction", "friction_speed")
+_TENSION_KEYS = ("reduced_mass", "orbit_rate", "commanded_length", "k1", "k2", "min_tension", "max_tension",
+                 "limit_width")
 _REEL_KEYS = ("at", "exit", "law", "speed", "rate", "times", "lengths", "rod_length", "birth_length", "retire_length",
-              "stored_length", "point", "exit_direction", "spool_radius", "spool_axis")
+              "stored_length", "point", "exit_direction", "spool_radius", "spool_axis") + _SPOOL_KEYS + _TENSION_KEYS
+VISCOUS = Kind("N s / m", "a viscous friction coefficient (force per speed)", "20 N s/m")
+#: default v_s of the Coulomb friction's smooth sign tanh(L'/v_s): 1 cm/s, below any pay-out
+#: speed of interest and wide enough for the implicit integrators' Newton iteration
+FRICTION_SPEED_DEFAULT = "0.01 m/s"
 
 #: a drum's axis must be perpendicular to its exit direction within this cosine (its rim moves along
 #: the exit direction where the line leaves it)
@@ -46,8 +54,15 @@ def parse_reel(value: Any, path: str, length_m: float) -> Reel:
     speed = rate = 0.0
     times: tuple = ()
     lengths: tuple = ()
+    prescribed = ("rate", "times", "lengths")
     others = {"constant": ("rate", "times", "lengths"), "exponential": ("speed", "times", "lengths"),
-              "table": ("speed", "rate")}[law]  # fmt: skip
+              "table": ("speed", "rate"), "spool": prescribed, "tension": prescribed}[law]  # fmt: skip
+    if law not in ("spool", "tension"):
+        others = others + _SPOOL_KEYS + _TENSION_KEYS
+    elif law == "spool":
+        others = others + _TENSION_KEYS
+    else:
+        others = others + ("torque",)
     for key in others:
         if key in table:
             raise SceneError(f"{path}.{key}", f"no {key!r} with law {law!r}", shown(table[key]))
@@ -55,6 +70,8 @@ def parse_reel(value: Any, path: str, length_m: float) -> Reel:
         times, lengths = _table_law(table, path, length_m)
     elif law == "constant":
         speed = _quantity(_required(table, "speed", path, SPEED.describe()), f"{path}.speed", SPEED)
+    elif law in ("spool", "tension"):
+        speed = _quantity(table.get("speed", "0 m/s"), f"{path}.speed", SPEED)  # L'(0)
     else:
         rate = _quantity(_required(table, "rate", path, RATE.describe()), f"{path}.rate", RATE)
     rod = _quantity(_required(table, "rod_length", path, LENGTH.describe()), f"{path}.rod_length", LENGTH, positive=True)
@@ -76,7 +93,8 @@ def parse_reel(value: Any, path: str, length_m: float) -> Reel:
             f"{retire:.6g} m",
         )
     hub = _parse_hub(table, path, exit_)
-    return Reel(law, exit_, speed, rate, rod, birth, retire, stored, times, lengths, **hub)
+    spool = _spool_law(table, path, law, exit_, length_m) if law in ("spool", "tension") else None
+    return Reel(law, exit_, speed, rate, rod, birth, retire, stored, times, lengths, spool=spool, **hub)
 
 
 def _unit_vector(raw, key: str) -> tuple:
@@ -113,6 +131,54 @@ def _parse_hub(table, path: str, exit_: str) -> dict:
                              f"cosine {sum(a * b for a, b in zip(axis, e)):.3g} with exit_direction")  # fmt: skip
         out["spool_axis"] = axis
     return out
+
+
+def _spool_law(table, path: str, law: str, exit_: str, length_m: float) -> SpoolLaw:
+    """The spool and its friction, and the tension law's gains and limits (docs/deployment.md 10)."""
+    drum = exit_ == "drum"
+    if drum:
+        inertia = _quantity(_required(table, "spool_inertia", path, f"{MOMENT_OF_INERTIA.describe()} (a drum's spool)"),
+                            f"{path}.spool_inertia", MOMENT_OF_INERTIA, positive=True)  # fmt: skip
+    else:
+        if "spool_inertia" in table:
+            raise SceneError(f"{path}.spool_inertia", "no spool inertia with exit 'canister' (the line leaves a "
+                             "canister at rest: no spool turns; use exit = 'drum')", shown(table["spool_inertia"]))  # fmt: skip
+        inertia = 0.0
+    needs_radius = drum or "torque" in table
+    radius = 0.0
+    if needs_radius:
+        radius = _quantity(_required(table, "drum_radius", path, f"{LENGTH.describe()} (the torque's arm)"),
+                           f"{path}.drum_radius", LENGTH, positive=True)  # fmt: skip
+    elif "drum_radius" in table:
+        radius = _quantity(table["drum_radius"], f"{path}.drum_radius", LENGTH, positive=True)
+    torque = _quantity(table.get("torque", "0 N m"), f"{path}.torque", TORQUE)
+    viscous = _quantity(table.get("viscous_friction", "0 N s/m"), f"{path}.viscous_friction", VISCOUS,
+                        nonnegative=True)  # fmt: skip
+    coulomb = _quantity(table.get("coulomb_friction", "0 N"), f"{path}.coulomb_friction", FORCE, nonnegative=True)
+    vs = _quantity(table.get("friction_speed", FRICTION_SPEED_DEFAULT), f"{path}.friction_speed", SPEED, positive=True)
+    if law == "spool":
+        return SpoolLaw(inertia, radius, torque, viscous, coulomb, vs)
+    mstar = _quantity(_required(table, "reduced_mass", path, MASS.describe()), f"{path}.reduced_mass", MASS,
+                      positive=True)  # fmt: skip
+    omega = _quantity(_required(table, "orbit_rate", path, ANGULAR_RATE.describe()), f"{path}.orbit_rate",
+                      ANGULAR_RATE, positive=True)  # fmt: skip
+    lc = _quantity(_required(table, "commanded_length", path, LENGTH.describe()), f"{path}.commanded_length", LENGTH,
+                   positive=True)  # fmt: skip
+    k1 = _number(_required(table, "k1", path, "a number"), f"{path}.k1", "a number (the gain on l - l_c)")
+    k2 = _number(_required(table, "k2", path, "a number"), f"{path}.k2", "a number (the gain on l'/Omega)")
+    tmin = tmax = width = 0.0
+    if "min_tension" in table or "max_tension" in table:
+        tmin = _quantity(table.get("min_tension", "0 N"), f"{path}.min_tension", FORCE, nonnegative=True)
+        tmax = _quantity(table["max_tension"], f"{path}.max_tension", FORCE, positive=True) if "max_tension" in table else 0.0
+        if tmax and not tmax > tmin:
+            raise SceneError(f"{path}.max_tension", f"more than min_tension ({tmin:.6g} N)", f"{tmax:.6g} N")
+        # the corners' width: 1 % of the band (or of the equilibrium tension without an upper limit)
+        scale = (tmax - tmin) if tmax else mstar * omega * omega * 3.0 * lc
+        width = _quantity(table.get("limit_width", f"{0.01 * scale!r} N"), f"{path}.limit_width", FORCE, positive=True)
+    elif "limit_width" in table:
+        raise SceneError(f"{path}.limit_width", "a min_tension or max_tension for it to round", shown(table["limit_width"]))
+    del length_m
+    return SpoolLaw(inertia, radius, 0.0, viscous, coulomb, vs, mstar, omega, lc, k1, k2, tmin, tmax, width)
 
 
 def _table_law(table, path: str, length_m: float) -> tuple[tuple, tuple]:

@@ -188,6 +188,8 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
                     entry["reel"]["speed"] = format_si(r.speed_m_s, SPEED)
                 elif r.law == "exponential":
                     entry["reel"]["rate"] = format_si(r.rate_1_s, RATE)
+                elif r.law in ("spool", "tension"):
+                    entry["reel"].update(_spool_dict(r))
                 else:
                     entry["reel"]["times"] = [format_si(x, TIME) for x in r.times_s]
                     entry["reel"]["lengths"] = [format_si(x, LENGTH) for x in r.lengths_m]
@@ -240,4 +242,29 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
         out["output"] = {"count": op.count}
     else:
         out["output"] = {"times": [format_si(x, TIME) for x in op.times_s]}
+    return out
+
+
+def _spool_dict(r) -> dict:
+    """The keys of a spool or tension law (scene/reels.py reads them back)."""
+    from ..units import ANGULAR_RATE, FORCE, MASS, MOMENT_OF_INERTIA, TORQUE
+    from .reels import VISCOUS
+
+    sp = r.spool
+    out = {"speed": format_si(r.speed_m_s, SPEED), "viscous_friction": format_si(sp.viscous_N_s_m, VISCOUS),
+           "coulomb_friction": format_si(sp.coulomb_N, FORCE), "friction_speed": format_si(sp.friction_speed_m_s, SPEED)}
+    if r.exit == "drum":
+        out["spool_inertia"] = format_si(sp.spool_inertia_kg_m2, MOMENT_OF_INERTIA)
+    if sp.drum_radius_m > 0.0:
+        out["drum_radius"] = format_si(sp.drum_radius_m, LENGTH)
+    if r.law == "spool":
+        out["torque"] = format_si(sp.torque_N_m, TORQUE)
+        return out
+    out.update({"reduced_mass": format_si(sp.reduced_mass_kg, MASS), "orbit_rate": format_si(sp.orbit_rate_rad_s, ANGULAR_RATE),
+                "commanded_length": format_si(sp.commanded_length_m, LENGTH), "k1": sp.k1, "k2": sp.k2})  # fmt: skip
+    if sp.limit_width_N > 0.0:
+        out["min_tension"] = format_si(sp.min_tension_N, FORCE)
+        if sp.max_tension_N > 0.0:
+            out["max_tension"] = format_si(sp.max_tension_N, FORCE)
+        out["limit_width"] = format_si(sp.limit_width_N, FORCE)
     return out

@@ -39,6 +39,7 @@ from ..kernel.layout import (
     DEFECT_REEL_NO_LDOT,
     DEFECT_REEL_RESCALED,
     FAIL_REEL_EMPTY,
+    FAIL_REEL_SPENT,
     H_MUTANT,
     H_NREEL,
     H_OFF_BODY,
@@ -64,6 +65,7 @@ from ..kernel.layout import (
     RL_RHO,
     RL_ROD,
     RL_SIZE,
+    RL_SOFF,
     RL_SPEED,
     RL_TETH,
     RL_TN,
@@ -131,13 +133,26 @@ def reel_law(p, rb, t):
 
 
 @njit(cache=True)
-def reel_update(t, p):
+def reel_update(t, att, p):
     """Every reel at time t: its law, the first rod's length and mass, the body's mass (its own
-    plus the stored tether).  Returns a failure code (the rod at the reel at zero length)."""
+    plus the stored tether).  A spool law's L and L' are read from the first-order block ``att``
+    and its L'' from the scratch, where the spool solve put it (tether/reel_spool.py).  Returns a
+    failure code (the rod at the reel at zero length)."""
     for i in range(int(p[H_NREEL])):
         rb = int(p[H_OFF_REEL]) + i * RL_SIZE
         rs = int(p[H_OFF_RSCR]) + i * RS_SIZE
-        L, Ld, Ldd = reel_law(p, rb, t)
+        so = int(p[rb + RL_SOFF])
+        if so >= 0:
+            if so + 1 < att.shape[0]:
+                L, Ld, Ldd = att[so], att[so + 1], p[rs + RS_LDD]
+            else:  # a kinematic use without the first-order block (statics): the law's start, at rest
+                L, Ld, Ldd = p[rb + RL_L0], 0.0, 0.0
+            # beyond the whole line only a trial stage goes (the event reel.<tether>.spent ends
+            # the run there); the body's mass must stay positive for it
+            if not p[rb + RL_MBODY] + p[rb + RL_RHO] * (p[rb + RL_LINE] - L) > 0.0:
+                return fail(p, FAIL_REEL_SPENT, int(p[rb + RL_ROD]), t, L)
+        else:
+            L, Ld, Ldd = reel_law(p, rb, t)
         g = int(p[rb + RL_ROD])
         l = L - p[rb + RL_FIXED]
         if not (l > 0.0):

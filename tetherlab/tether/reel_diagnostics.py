@@ -7,7 +7,9 @@ the power the exit takes out of the mechanical energy
 
     D = T L'(1 + eps) - 1/2 rho L'^3 (1 + eps)^2 - 1/2 EA eps^2 L'       (docs/deployment.md 5),
 
-its Carnot part (a canister: 1/2 rho |L'|^3 (1 + eps)^2; a drum: 0), and the material corrections
+its Carnot part (a canister: 1/2 rho |L'|^3 (1 + eps)^2; a drum: 0), under a spool law its L'',
+torque, friction, the power taken by brake and friction, the spool's kinetic energy, the exit's
+own loss and the tension law's command (docs/deployment.md 10), and the material corrections
 of the first rod's shares: the TMED shares (tether/rod.py) count the affine field v_A + xi D', the
 material moves with v_A + xi D' + (1 - xi) w, w = lambda D, which adds
 
@@ -39,13 +41,20 @@ from ..kernel.layout import (
     RL_EXIT,
     RL_RHO,
     RL_ROD,
+    RL_SOFF,
     RL_SIZE,
     RL_TETH,
     RS_JUMP,
     RS_L,
     RS_LAM,
+    RS_FB,
+    RS_FR,
     RS_LD,
+    RS_LDD,
     RS_LROD,
+    RS_MEFF,
+    RS_TAU,
+    RS_TCMD,
     RS_SIZE,
     RT_EA,
     RT_M,
@@ -68,6 +77,7 @@ from .solve import system_accelerations
 REEL_COLUMNS = (
     "deployed_length_m", "speed_m_s", "rod_length_m", "exit_speed_m_s", "exit_tension_N", "exit_jump_N",
     "body_pull_N", "exit_power_W", "carnot_power_W", "dpx", "dpy", "dpz", "dhx", "dhy", "dhz", "dke", "rod_force_N",
+    "accel_m_s2", "torque_N_m", "friction_N", "brake_power_W", "spool_kinetic_J", "exit_loss_power_W", "command_N",
 )  # fmt: skip
 R_NCOL = len(REEL_COLUMNS)
 
@@ -152,4 +162,21 @@ def reel_rows(ts, Y, p, out, acc, datt):
                 o[13] += s4
                 o[14] += s5
                 o[15] += s6
+            o[17] = p[rs + RS_LDD]
+            if p[rb + RL_SOFF] >= 0.0:  # a spool law (docs/deployment.md 10.3)
+                ms = p[rs + RS_MEFF]
+                fb = p[rs + RS_FB]
+                o[18] = p[rs + RS_TAU]
+                o[19] = p[rs + RS_FR]
+                o[20] = fb * ld  # taken by the brake and the friction (a motor gives it when negative)
+                o[21] = 0.5 * ms * ld * ld
+                # the exit's own loss, from the jumps of strain and speed there (10.3)
+                if int(p[rb + RL_EXIT]) == REEL_EXIT_CANISTER:
+                    o[22] = ld * eps * (tens - 0.5 * ea * eps) + 0.5 * rho * ld * ld * ld * (1.0 - eps * eps)
+                else:
+                    o[22] = ld * eps * (tens - 0.5 * ea * eps) - 0.5 * rho * ld * ld * ld * eps * eps
+                o[23] = p[rs + RS_TCMD]
+            else:
+                for c in range(18, 24):
+                    o[c] = 0.0
     return -1

@@ -29,6 +29,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .._jit import njit, njit_hot
 from ..bodies.parts import (
     body_add_child,
@@ -82,6 +84,7 @@ from ..kernel.layout import (
 )
 from .parts import tether_back_substitute, tether_reduce, tether_walk
 from .reel import reel_body_forces, reel_update
+from .reel_spool import n_spools, record_tensions, set_trial, spool_indices, spool_system, write_spool_derivatives
 from .rod import fail, next_joint
 
 
@@ -131,17 +134,74 @@ def forward(t, q, qd, att, p, with_forces):
     return 0
 
 
-@njit_hot(cache=True)
+@njit(cache=True)  # allocates the spool solve's small arrays; the pass itself (_evaluate) is hot
 def system_accelerations(t, q, qd, att, p, acc, datt):
-    """Accelerations of q_trans into ``acc`` and the derivatives of the attitude and wheel block
-    into ``datt`` (empty for a point-mass scene).  Leaves in the scratch area, per joint, the
-    reaction J_k (used by the diagnostics).  Returns 0 or a failure code (details in p's header).
+    """Accelerations of q_trans into ``acc`` and the derivatives of the attitude, wheel and spool
+    blocks into ``datt`` (empty for a point-mass scene without a spool).  Leaves in the scratch
+    area, per joint, the reaction J_k (used by the diagnostics).  Returns 0 or a failure code
+    (details in p's header).
+
+    A reel whose length is state (a spool law) needs its L'' from the spool's balance, which
+    holds the exit tension, itself affine in L'': solved exactly by evaluating the system at
+    L'' = 0 and at one unit per spool reel, then once more at the solution (tether/reel_spool.py).
     """
     reels = int(p[H_NREEL]) > 0
-    if reels:  # lengths and masses that vary in time, before anything reads them (tether/reel.py)
-        code = reel_update(t, p)
+    if not reels:
+        return _evaluate(t, q, qd, att, p, acc, datt)
+    ns = n_spools(p)
+    if ns == 0:
+        code = reel_update(t, att, p)  # lengths and masses that vary in time, before anything reads them
         if code != 0:
             return code
+        return _evaluate(t, q, qd, att, p, acc, datt)
+    idx = spool_indices(p)
+    trial = np.zeros(ns)
+    T0 = np.zeros(ns)
+    Tk = np.zeros(ns)
+    S = np.zeros((ns, ns))
+    set_trial(p, idx, trial)
+    code = reel_update(t, att, p)
+    if code != 0:
+        return code
+    code = _evaluate(t, q, qd, att, p, acc, datt)
+    if code != 0:
+        return code
+    record_tensions(p, idx, T0)
+    for c in range(ns):
+        trial[c] = 1.0
+        set_trial(p, idx, trial)
+        reel_update(t, att, p)
+        code = _evaluate(t, q, qd, att, p, acc, datt)
+        if code != 0:
+            return code
+        record_tensions(p, idx, Tk)
+        for a in range(ns):
+            S[a, c] = Tk[a] - T0[a]
+        trial[c] = 0.0
+    A, b = spool_system(p, idx, att, T0, S)
+    if ns == 1:
+        if A[0, 0] == 0.0:
+            return fail(p, FAIL_SINGULAR, -1, t, 0.0)
+        ldd = b / A[0, 0]
+    else:
+        ldd = np.linalg.solve(A, b)
+    if not np.all(np.isfinite(ldd)):
+        return fail(p, FAIL_NONFINITE, -1, t, 0.0)
+    set_trial(p, idx, ldd)
+    reel_update(t, att, p)
+    code = _evaluate(t, q, qd, att, p, acc, datt)
+    if code != 0:
+        return code
+    record_tensions(p, idx, Tk)
+    spool_system(p, idx, att, T0, S)  # the torque, friction and command of the true state into the scratch
+    write_spool_derivatives(p, idx, att, datt, ldd)
+    return 0
+
+
+@njit_hot(cache=True)
+def _evaluate(t, q, qd, att, p, acc, datt):
+    """One pass of the reaction solve at the lengths and masses the reels wrote (module docstring)."""
+    reels = int(p[H_NREEL]) > 0
     code = forward(t, q, qd, att, p, True)
     if code != 0:
         return code

@@ -238,6 +238,9 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         ("deployment_hub_centripetal_negative_control", "rigid_centripetal_dropped",
          ("deployment_hub_momentum_over_bound", "deployment_hub_energy_over_bound")),
         ("deployment_hub_ring_negative_control", "reel_hub_ring_dropped", ("deployment_hub_axis_spin_over_bound",)),
+        ("deployment_spool_uncoupled_negative_control", "spool_uncoupled",
+         ("deployment_spool_drum_over_budget", "deployment_spool_energy_over_bound")),
+        ("deployment_tension_k2_negative_control", "tension_k2_flipped", ("deployment_tension_roots_over_budget",)),
     ):  # fmt: skip
         ctrl = study_values.get(ctrl_gate)
         if ctrl is not None and ctrl <= gates[ctrl_gate]["threshold"]:

@@ -26,7 +26,7 @@ def _cores() -> int:
 SECTION_COST_S = {
     "study:fidelity": 255, "study:hard_cases": 210, "study:workprecision": 200, "study:convergence": 180,
     "study:deorbit": 170, "study:uncertainty_deorbit": 150, "study:rigid_bodies": 56, "controls": 55,
-    "study:bead_vs_tmed": 50, "study:uncertainty": 25, "study:deployment": 8,
+    "study:bead_vs_tmed": 50, "study:uncertainty": 25, "study:deployment": 25,
     "study:stiefel_table": 34, "study:rigid_scenes": 33, "figures": 20, "check:invariants": 13,
     "check:vertical": 12, "check:hanging-chain": 15, "check:inextensible": 60, "check:libration": 7, "check:reproducible": 5, "study:catenary": 5,
 }

@@ -182,6 +182,11 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_hub_centripetal_negative_control": g.get("deployment_hub_centripetal_negative_control"),
         "deployment_hub_axis_spin_over_bound": g.get("deployment_hub_axis_spin_over_bound"),
         "deployment_hub_ring_negative_control": g.get("deployment_hub_ring_negative_control"),
+        "deployment_spool_drum_over_budget": g.get("deployment_spool_drum_over_budget"),
+        "deployment_spool_energy_over_bound": g.get("deployment_spool_energy_over_bound"),
+        "deployment_tension_roots_over_budget": g.get("deployment_tension_roots_over_budget"),
+        "deployment_spool_uncoupled_negative_control": g.get("deployment_spool_uncoupled_negative_control"),
+        "deployment_tension_k2_negative_control": g.get("deployment_tension_k2_negative_control"),
     }
 
 

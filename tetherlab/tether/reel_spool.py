@@ -1,0 +1,227 @@
+"""A reel as a dynamical system: the spool's balance gives L'' (compiled; docs/deployment.md 10).
+
+Under the laws ``spool`` and ``tension`` the deployed length L and its rate L' are state (the
+StateLayout block ``reel.<tether>``) and L'' comes from the balance of the spool, in force units
+at the rim (docs/deployment.md 10.1):
+
+    m_s L'' = T - j - F_b,
+
+* T = -J_0.u the line's tension at the exit (the reaction solve's);
+* j the momentum the exit gives the material: rho L'^2 eps on a drum (the turns are unstretched
+  at rim speed L', the line leaves at L'(1 + eps)), rho L'^2 (1 + eps) through a canister
+  (the material leaves from rest);
+* m_s = J/R^2 + rho (stored length) on a drum (the spool and the turns still on it), 0 on a
+  canister (no spool: the brake holds the line where it leaves);
+* F_b = tau/R + c L' + F_c tanh(L'/v_s) the force of the brake or motor and the friction
+  against the pay-out; the law ``tension`` sets tau/R to the commanded tension
+  T_c = m* Omega^2 [3 l_c + k1 (L - l_c) + k2 L'/Omega], smoothly limited.
+
+T depends on L'' through the first rod's apparent load (kappa = l''/l - 2 lambda^2, tether/reel.py),
+and on nothing else that L'' changes: every reaction is affine in it.  So the solve is exact, not
+lagged: one evaluation at L'' = 0 gives T_0, one per spool reel with its L'' = 1 the column of the
+sensitivity S = dT/dL'', then (diag(m_s) - S) L'' = T_0 - j - F_b is solved and the system
+evaluated once more at the solution (so that every scratch value is that of the true state).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._jit import njit
+from ..kernel.layout import (
+    DEFECT_SPOOL_UNCOUPLED,
+    DEFECT_TENSION_K2_SIGN,
+    H_MUTANT,
+    H_NREEL,
+    H_NRODS,
+    H_OFF_REEL,
+    H_OFF_RSCR,
+    H_OFF_SCR,
+    H_OFF_TETH,
+    REEL_EXIT_DRUM,
+    REEL_LAW_TENSION,
+    RL_CV,
+    RL_EXIT,
+    RL_FC,
+    RL_K1,
+    RL_K2,
+    RL_LAW,
+    RL_LC,
+    RL_LINE,
+    RL_MEFF,
+    RL_MSTAR,
+    RL_OMEGA,
+    RL_R,
+    RL_RHO,
+    RL_ROD,
+    RL_SIZE,
+    RL_SOFF,
+    RL_TAU,
+    RL_TETH,
+    RL_TMAX,
+    RL_TMIN,
+    RL_TW,
+    RL_VS,
+    RS_FB,
+    RS_FR,
+    RS_LDD,
+    RS_MEFF,
+    RS_SIZE,
+    RS_TAU,
+    RS_TCMD,
+    RS_TEX,
+    SJ_J,
+    SJ_SIZE,
+    SR_EPS,
+    SR_SIZE,
+    SR_U,
+    TT_ROD0,
+    TT_SIZE,
+)
+
+
+@njit(cache=True, inline="always")
+def n_spools(p):
+    """Number of reels whose length is state."""
+    n = 0
+    for i in range(int(p[H_NREEL])):
+        if p[int(p[H_OFF_REEL]) + i * RL_SIZE + RL_SOFF] >= 0.0:
+            n += 1
+    return n
+
+
+@njit(cache=True, inline="always")
+def _softplus(x, w):
+    """w ln(1 + e^(x/w)), without overflow: a smooth max(x, 0) within w ln 2 of it."""
+    z = x / w
+    if z > 30.0:
+        return x
+    return w * math.log1p(math.exp(z))
+
+
+@njit(cache=True)
+def tension_command(p, rb, L, Ld):
+    """The commanded tension of the law ``tension`` (Rupp/Kissel family), within its smooth
+    limits: T_c = m* Omega^2 [3 l_c + k1 (L - l_c) + k2 L'/Omega]; below T_min and above T_max
+    it bends onto the limit over the width w (softplus corners: within w ln 2 at the limit, and
+    e^(-d/w) w off the linear law at a distance d from it)."""
+    om = p[rb + RL_OMEGA]
+    lc = p[rb + RL_LC]
+    k2 = -p[rb + RL_K2] if int(p[H_MUTANT]) == DEFECT_TENSION_K2_SIGN else p[rb + RL_K2]
+    tc = p[rb + RL_MSTAR] * om * om * (3.0 * lc + p[rb + RL_K1] * (L - lc) + k2 * Ld / om)
+    w = p[rb + RL_TW]
+    if w > 0.0:
+        lo = p[rb + RL_TMIN]
+        tc = lo + _softplus(tc - lo, w)
+        hi = p[rb + RL_TMAX]
+        if hi > lo:
+            tc = hi - _softplus(hi - tc, w)
+    return tc
+
+
+@njit(cache=True)
+def spool_forces(p, i, L, Ld, eps):
+    """Reel i's (m_s, j, F_b) of the balance m_s L'' = T - j - F_b (module docstring), and its
+    torque, friction and command into the scratch."""
+    rb = int(p[H_OFF_REEL]) + i * RL_SIZE
+    rs = int(p[H_OFF_RSCR]) + i * RS_SIZE
+    rho = p[rb + RL_RHO]
+    drum = int(p[rb + RL_EXIT]) == REEL_EXIT_DRUM
+    if drum:
+        ms = p[rb + RL_MEFF] + rho * (p[rb + RL_LINE] - L)
+        jump = rho * Ld * Ld * eps
+    else:
+        ms = 0.0
+        jump = rho * Ld * Ld * (1.0 + eps)
+    fr = p[rb + RL_CV] * Ld
+    vs = p[rb + RL_VS]
+    if p[rb + RL_FC] > 0.0:
+        fr += p[rb + RL_FC] * math.tanh(Ld / vs)
+    R = p[rb + RL_R]
+    if int(p[rb + RL_LAW]) == REEL_LAW_TENSION:
+        tc = tension_command(p, rb, L, Ld)
+        p[rs + RS_TCMD] = tc
+        tau_r = tc  # the motor's torque over R
+        p[rs + RS_TAU] = tc * R
+    else:
+        tau_r = p[rb + RL_TAU] / R if R > 0.0 else 0.0
+        p[rs + RS_TCMD] = 0.0
+        p[rs + RS_TAU] = p[rb + RL_TAU]
+    p[rs + RS_FR] = fr
+    p[rs + RS_FB] = tau_r + fr
+    p[rs + RS_MEFF] = ms
+    return ms, jump, tau_r + fr
+
+
+@njit(cache=True)
+def exit_tension(p, i):
+    """The line's tension at reel i's exit, -J_0.u, from the last reaction solve."""
+    rb = int(p[H_OFF_REEL]) + i * RL_SIZE
+    k = int(p[rb + RL_TETH])
+    g = int(p[rb + RL_ROD])
+    g0 = int(p[int(p[H_OFF_TETH]) + k * TT_SIZE + TT_ROD0])
+    sb = int(p[H_OFF_SCR]) + g * SR_SIZE
+    j0 = int(p[H_OFF_SCR]) + int(p[H_NRODS]) * SR_SIZE + (g0 + k) * SJ_SIZE + SJ_J
+    return -(p[j0] * p[sb + SR_U] + p[j0 + 1] * p[sb + SR_U + 1] + p[j0 + 2] * p[sb + SR_U + 2])
+
+
+@njit(cache=True)
+def first_rod_strain(p, i):
+    rb = int(p[H_OFF_REEL]) + i * RL_SIZE
+    return p[int(p[H_OFF_SCR]) + int(p[rb + RL_ROD]) * SR_SIZE + SR_EPS]
+
+
+@njit(cache=True)
+def set_trial(p, idx, values):
+    """L'' of every spool reel (idx: their reel indices) into the scratch, read by reel_update."""
+    for a in range(idx.shape[0]):
+        p[int(p[H_OFF_RSCR]) + idx[a] * RS_SIZE + RS_LDD] = values[a]
+
+
+@njit(cache=True)
+def spool_system(p, idx, att, T0, S):
+    """The matrix and right-hand side of the L'' solve (module docstring) from T_0 and S."""
+    ns = idx.shape[0]
+    A = np.zeros((ns, ns))
+    b = np.zeros(ns)
+    coupled = int(p[H_MUTANT]) != DEFECT_SPOOL_UNCOUPLED
+    for a in range(ns):
+        i = idx[a]
+        so = int(p[int(p[H_OFF_REEL]) + i * RL_SIZE + RL_SOFF])
+        ms, jump, fb = spool_forces(p, i, att[so], att[so + 1], first_rod_strain(p, i))
+        for c in range(ns):
+            A[a, c] = -S[a, c] if coupled else 0.0
+        A[a, a] += ms
+        b[a] = T0[a] - jump - fb
+    return A, b
+
+
+@njit(cache=True)
+def spool_indices(p):
+    ns = n_spools(p)
+    idx = np.empty(ns, np.int64)
+    a = 0
+    for i in range(int(p[H_NREEL])):
+        if p[int(p[H_OFF_REEL]) + i * RL_SIZE + RL_SOFF] >= 0.0:
+            idx[a] = i
+            a += 1
+    return idx
+
+
+@njit(cache=True)
+def record_tensions(p, idx, out):
+    for a in range(idx.shape[0]):
+        out[a] = exit_tension(p, idx[a])
+        p[int(p[H_OFF_RSCR]) + idx[a] * RS_SIZE + RS_TEX] = out[a]
+
+
+@njit(cache=True)
+def write_spool_derivatives(p, idx, att, datt, ldd):
+    """d/dt [L, L'] = [L', L''] of every spool reel into datt."""
+    for a in range(idx.shape[0]):
+        so = int(p[int(p[H_OFF_REEL]) + idx[a] * RL_SIZE + RL_SOFF])
+        datt[so] = att[so + 1]
+        datt[so + 1] = ldd[a]
+
