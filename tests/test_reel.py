@@ -302,11 +302,3 @@ def test_slow_retrieval_amplitude_grows_as_one_over_length(study):
 def test_a_reel_whose_law_the_kernel_ignores_fails_the_retrieval_gate(study):
     ratio, _, _ = study.retrieval_run(defect=DEFECT_REEL_FROZEN)
     assert np.abs(ratio - 1.0).max() > 0.1
-
-
-def test_a_run_written_as_it_goes_refuses_a_reel(tmp_path):
-    from tetherlab.runstore import run_to_dir
-
-    with pytest.raises(SceneError) as err:
-        run_to_dir(_free_scene(), tmp_path / "run")
-    assert err.value.key == "tethers.main.reel"
