@@ -42,7 +42,9 @@ state layout.  Cowell rows go straight into ``states.npy``; another formulation'
 ``segments/seg-KKKKK.npy`` (its own state, ``(rows of the segment, its state length)``) and are
 turned into Cowell rows of ``states.npy`` when the segment ends, so ``states.npy`` and the
 Parquet parts are one Cowell table whatever the formulation (parts are written as their rows are
-final: per chunk for Cowell, per segment otherwise).  The checkpoint adds the loop's own state
+final: per chunk for Cowell and for DROMO's time form, whose rows turn into Cowell rows one by one
+(``SegmentPlan.rowwise``: they are converted after every chunk, the same bits as at the end), per
+segment for cowell-orbit).  The checkpoint adds the loop's own state
 (segment index, its start time and Cowell start state, the rows before it, the step budget, the
 summed statistics, the events, the frame anchors): a resumed run re-enters the same segment with
 the same anchor and continues the driver from its checkpoint, so it is identical across segments
@@ -453,8 +455,12 @@ def _plain(x):
 class _SegmentStore:
     """The streamed run's side of the segment loop (the ``store`` of pipeline.run_segments)."""
 
-    def __init__(self, store: _Store, states, p, restart, on_chunk):
+    def __init__(self, store: _Store, states, p, restart, on_chunk, leave=None):
         self.store = store
+        # a formulation whose rows turn into Cowell rows one by one (SegmentPlan.rowwise): its rows
+        # go into states.npy, and full parts are written, after every chunk, not at the segment's end
+        self.leave = leave
+        self.converted = 0  # rows of the running segment already in states.npy
         self.states = states
         self.p = p
         self.on_chunk = on_chunk
@@ -473,6 +479,9 @@ class _SegmentStore:
         if self.restart is not None and k == self.resume["k"]:
             restart = dict(self.restart, done=self.restart["seg_done"])
         self.restart = None
+        self.seg_t, self.ctx = seg_t, ctx
+        # (a resumed segment: the rows before its checkpoint were converted and flushed with it)
+        self.converted = restart["seg_done"] if restart is not None else 0
         if self.direct:
             self.y_out = self.states[loop["k_out"] : loop["k_out"] + seg_t.size]
         else:
@@ -488,8 +497,20 @@ class _SegmentStore:
         return {"y_out": self.y_out, "checkpoint": self._chunk, "restart": restart}
 
     def _chunk(self, state):
-        # rows final in states.npy: the driver's for Cowell, else those of the segments done
-        done = self.loop["k_out"] + state["done"] if self.direct else self.loop["k_out"]
+        # rows final in states.npy: the driver's for Cowell, those converted so far for a row-wise
+        # formulation, else those of the segments done
+        k_out = self.loop["k_out"]
+        if self.direct:
+            done = k_out + state["done"]
+        elif self.leave is not None:
+            b = min(int(state["done"]), self.states.shape[0] - k_out)
+            a = self.converted
+            if b > a:
+                self.states[k_out + a : k_out + b] = self.leave(self.ctx, self.seg_t[a:b], self.y_out[a:b])
+                self.converted = b
+            done = k_out + self.converted
+        else:
+            done = k_out
         self.on_chunk(state, done, self.loop, self.y_out)
 
     def end(self, k, k_out, t, y_rows) -> None:
@@ -561,7 +582,7 @@ def stream_segments(store: _Store, states, p, restart, update, sig, checkpoint_s
                 store.write_part(k, prep.t_out[a:done], states[a:done], p, None if a == 0 else states[0])
             interrupted(state, done)
 
-    seg_store = _SegmentStore(store, states, p, restart, on_chunk)
+    seg_store = _SegmentStore(store, states, p, restart, on_chunk, plan.leave if plan.rowwise else None)
     seg_store.have = have
     return run_segments(prep, plan, update, store=seg_store), p
 
