@@ -125,6 +125,26 @@ def test_the_run_reads_back_as_one_table(reference):
     assert back.ok and len(back.diagnostics) == len(ts)
 
 
+def test_plot_of_a_reel_run_draws_its_deployment_and_material_invariants(reference):
+    """``tetherlab plot`` on a reel run: the reel's length and rod count, and the invariants of the
+    material (stored tether and exit work included) drawn from the run's own invariants table."""
+    from tetherlab.plots import _plt, figures
+
+    out, _, mem = reference
+    figs = figures(out)
+    assert {"deployment.png", "invariants.png", "tension.png"} <= set(figs)
+    length = figs["deployment.png"].axes[0].lines[0].get_ydata()
+    assert np.array_equal(length, mem.reel["deployed_length_m"].to_numpy())
+    energy = figs["invariants.png"].axes[2]
+    title = energy.get_title(loc="left")
+    assert "exit" in title and "no effect: conserved" in title
+    E = mem.invariants["energy_plus_exit_work_J"].to_numpy()
+    drawn = energy.lines[0].get_ydata() * float(mem.invariants["kinetic_J"].abs().max())
+    assert np.allclose(drawn, E - E[0], rtol=1e-12, atol=0.0)
+    for fig in figs.values():
+        _plt().close(fig)
+
+
 def _interrupt_on_call(monkeypatch, k: int, signum=signal.SIGINT):
     """Deliver ``signum`` to this process during the k-th kernel call (as a user's Ctrl-C)."""
     calls = [0]

@@ -220,6 +220,8 @@ def run_to_dir(scene, out: Path, *, progress=None, checkpoint_s: float = 5.0, pa
         "resumable": True,
         "segments": 0,
         "phases": [],
+        "model": {"effects": prep.model.effect_names, "method": prep.method, "rtol": prep.rtol,
+                  "ref_radius_m": prep.ref_radius_m, "ref_period_s": prep.ref_period_s},
     }
     _write_json(out / RUN_JSON, record)
     return _run(scene, out, record, None, None, progress, checkpoint_s)
