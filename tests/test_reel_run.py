@@ -102,6 +102,12 @@ def test_reel_run_equals_simulate_bit_for_bit(reference):
     assert not (out / CHECKPOINT).exists()
     assert rec["stats"]["n_accepted"] == sum(ph.stats["n_accepted"] for ph in mem.phases)
     _same_run(reelstore.load(out), mem)
+    # the summary's warnings are those of the phases' tables in order (the line pushes from 5.5 s)
+    from tetherlab.regime import check_parts
+
+    expected = check_parts(_scene(), [(ph.timeseries, ph.diagnostics) for ph in mem.phases])
+    assert [w["text"] for w in rec["warnings"]] == [w["text"] for w in expected]
+    assert any("compression" in w["text"] for w in rec["warnings"])
 
 
 def test_the_run_reads_back_as_one_table(reference):
@@ -280,8 +286,10 @@ def test_cli_runs_and_resumes_a_reel_scene(tmp_path, capsys):
     ref = tmp_path / "ref"
     run_to_dir(_scene(), ref, progress=False, part_rows=PART_ROWS)
     out = tmp_path / "o"
-    assert main(["run", str(ref / "run.json"), "--out", str(out), "--quiet", "--part-rows", str(PART_ROWS)]) == 0
+    assert main(["run", str(ref / "run.json"), "--out", str(out), "--part-rows", str(PART_ROWS)]) == 0
     _same_dirs(out, ref)
+    said = capsys.readouterr().out
+    assert "6 phases: 5 births, 0 retirements" in said and "steps" in said
     assert main(["run", "--resume", str(out)]) == 2  # a finished run: nothing to resume
     assert "nothing to resume" in capsys.readouterr().err
 

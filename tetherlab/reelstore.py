@@ -46,7 +46,7 @@ import pandas as pd
 
 from .runstore import (
     CHECKPOINT, FORMAT, RUN_JSON, TABLES, Clock, Interrupted, RunDirError, _code_digest, _read_json, _Signals, _Store,
-    _write_checkpoint, _write_json, driver_restart, stream_segments, write_last_parts,
+    _write_checkpoint, _write_json, driver_restart, regime_warnings, stream_segments, write_last_parts,
 )  # fmt: skip
 
 PHASES = "phases"
@@ -280,7 +280,9 @@ def _run(scene, out, record, loop, restart, progress, checkpoint_s, wall_before=
     record.update(
         state="complete" if status == 0 else "failed", status=int(status), ok=status == 0,
         message=message or ("" if status == 0 else "failed"), stats=stats, changes=changes,
-        versions=library_versions(), warnings=[],
+        versions=library_versions(),
+        # (no slow-down warning: the progress trace counts each birth's model building and remap)
+        warnings=regime_warnings(scene, sorted((out / PHASES).glob("phase-*")), ()),
     )  # fmt: skip
     _write_json(out / RUN_JSON, record)
     (out / CHECKPOINT).unlink(missing_ok=True)

@@ -730,8 +730,13 @@ def _run_in_memory(store: _Store, record: dict, progress):
 
 
 def _regime_warnings(store: _Store, trace) -> list[dict]:
+    return regime_warnings(store.scene, [store.out], trace)
+
+
+def regime_warnings(scene, outs, trace) -> list[dict]:
     """The run summary's warnings (tetherlab/regime.py), from the columns they need read back
-    from the parts on disk one part at a time (strains, axial forces, libration angles)."""
+    from the parts on disk one part at a time (strains, axial forces, libration angles), over the
+    run directories ``outs`` in order (a reel run's phases: tetherlab/reelstore.py)."""
     import pyarrow.parquet as pq
 
     from .regime import check_parts
@@ -740,13 +745,14 @@ def _regime_warnings(store: _Store, trace) -> list[dict]:
         return c == "t_s" or c.endswith((".strain", ".axial_force_N", ".theta_rad", ".phi_rad"))
 
     def parts():
-        folders = [store.out / name for name in TABLES]
-        files = [sorted(f.glob("part-*.parquet")) for f in folders]
-        for ts_file, dg_file in zip(*files):
-            yield tuple(pq.read_table(f, columns=[c for c in pq.read_schema(f).names if wanted(c)]).to_pandas()
-                        for f in (ts_file, dg_file))  # fmt: skip
+        for out in outs:
+            folders = [out / name for name in TABLES]
+            files = [sorted(f.glob("part-*.parquet")) for f in folders]
+            for ts_file, dg_file in zip(*files):
+                yield tuple(pq.read_table(f, columns=[c for c in pq.read_schema(f).names if wanted(c)]).to_pandas()
+                            for f in (ts_file, dg_file))  # fmt: skip
 
-    return check_parts(store.scene, parts(), trace)
+    return check_parts(scene, parts(), trace)
 
 
 def write_last_parts(store: _Store, res, p, states) -> int:
