@@ -8,7 +8,7 @@ run store writes a run of one model (tetherlab/runstore.py: the segment loop, th
 per-rod columns change from phase to phase.  The run directory:
 
 * ``run.json`` -- as for any run, plus ``"reel": true``, ``phases`` (per phase: index, start and
-  end time, rods per reel tether, rows, state length and named blocks, its step statistics) and
+  end time, rods per reel tether, rows, state length, its step statistics) and
   ``changes`` (the births and retirements);
 * ``phases/phase-PPPPP/`` -- the phase's ``phase.json`` (written as it starts: index, start time,
   rods per reel tether, state length and named blocks), its ``states.npy`` (rows in that phase's
@@ -174,7 +174,7 @@ class DirPhases:
         rows = int(len(res.t))
         self.record["phases"] = self.record["phases"][:ph] + [{
             "phase": ph, "t_a_s": float(prep.t0_s), "t_b_s": float(res.t_end), "rods": dict(loop["rods"]),
-            "rows": rows, "state_length": int(lay.size), "state_blocks": [[b.name, b.start, b.stop] for b in lay.blocks()],
+            "rows": rows, "state_length": int(lay.size),  # (its named blocks: the phase's phase.json)
             "status": int(res.status), "message": message,
             "stats": {k: stats[k] for k in (*SUMMED, "stopped_by", "formulation") if k in stats},
         }]  # fmt: skip
