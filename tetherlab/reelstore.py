@@ -140,9 +140,9 @@ class DirPhases:
         folder.mkdir(parents=True, exist_ok=True)
         lay = prep.model.state
         # the phase's layout beside its rows, from its start (an interrupted phase reads back too)
+        blocks = [[b.name, b.start, b.stop] for b in lay.blocks()]
         _write_json(folder / "phase.json", {"phase": ph, "t_a_s": float(prep.t0_s), "rods": dict(loop["rods"]),
-                                            "state_length": int(lay.size),
-                                            "state_blocks": [[b.name, b.start, b.stop] for b in lay.blocks()]})  # fmt: skip
+                                            "state_length": int(lay.size), "state_blocks": blocks})  # fmt: skip
         store = _Store(folder, self.scene, prep, self.part_rows)
         store.checkpoint_dir = self.out
         shape = (int(prep.t_out.size), int(prep.model.state.size))
@@ -275,8 +275,8 @@ def _run(scene, out, record, loop, restart, progress, checkpoint_s, wall_before=
         for k in SUMMED:
             stats[k] += ph["stats"].get(k, 0)
     last = record["phases"][-1]["stats"]
-    stats.update(stopped_by=stopped, formulation=last.get("formulation"), n_phases=len(record["phases"]), wall_s=wall_s, n_chunks=chunks_before,
-                 session_wall_s=time.perf_counter() - clock.start)  # fmt: skip
+    stats.update(stopped_by=stopped, formulation=last.get("formulation"), n_phases=len(record["phases"]),
+                 wall_s=wall_s, n_chunks=chunks_before, session_wall_s=time.perf_counter() - clock.start)  # fmt: skip
     record.update(
         state="complete" if status == 0 else "failed", status=int(status), ok=status == 0,
         message=message or ("" if status == 0 else "failed"), stats=stats, changes=changes,
