@@ -340,3 +340,22 @@ def test_reel_run_killed_by_sigkill_resumes_identically(tmp_path, reference):
     assert main(["run", "--resume", str(out), "--quiet"]) == 0
     _same_dirs(out, ref)
     assert math.isfinite(json.loads((out / "run.json").read_text())["stats"]["wall_s"])
+
+
+def test_a_reel_run_killed_before_its_first_checkpoint_starts_over(tmp_path, monkeypatch, reference):
+    """No checkpoint.npz (a kill before the first was written): --resume runs it from the start,
+    to the uninterrupted run's numbers."""
+    ref, _, _ = reference
+    out = _interrupted_mid_phase(tmp_path, monkeypatch)
+    (out / CHECKPOINT).unlink()
+    rec = resume_dir(out, progress=False)
+    assert rec["state"] == "complete"
+    _same_dirs(out, ref)
+
+
+def test_load_of_a_run_without_a_reel_says_what_to_use(tmp_path):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "run.json").write_text(json.dumps({"state": "complete", "phases": []}))
+    with pytest.raises(RunDirError, match="Result.load"):
+        reelstore.load(out)
