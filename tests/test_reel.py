@@ -362,14 +362,6 @@ def test_a_reel_whose_law_the_kernel_ignores_fails_the_retrieval_gate(study):
     assert np.abs(ratio - 1.0).max() > 0.1
 
 
-def test_a_run_written_as_it_goes_refuses_a_reel(tmp_path):
-    from tetherlab.runstore import run_to_dir
-
-    with pytest.raises(SceneError) as err:
-        run_to_dir(_free_scene(), tmp_path / "run")
-    assert err.value.key == "tethers.main.reel"
-
-
 def test_structured_newton_matrix_takes_the_reel_rod_at_its_own_time():
     """RADAU5 forms the structured matrix at a state and time of its own (mid-step), not at the
     last rhs call; the rod at the reel must then have its length at that time (newton.form_blocks)

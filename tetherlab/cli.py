@@ -195,6 +195,11 @@ def run_summary(record: dict, out, total_s: float) -> str:
         f"  time: set-up {setup:.2f} s + compile {compile_s:.2f} s + integrate and write {session - compile_s:.2f} s"
         f" = total {setup + session:.2f} s",
     ]
+    if record.get("reel"):  # a deployment: its phases between births and retirements (reelstore.py)
+        kinds = [c["change"] for c in record.get("changes", [])]
+        lines.insert(1, f"  {len(record.get('phases', []))} phases: {kinds.count('birth')} births, "
+                        f"{kinds.count('retire')} retirements" + ("; the whole tether retrieved" if "retrieved" in kinds
+                                                                   else ""))  # fmt: skip
     if int(record.get("segments", 1) or 1) > 1:  # a resumed run: the sessions before this one count too
         lines.append(f"  (integration over every session of this run so far, {record['segments']} sessions: "
                      f"{float(s.get('wall_s', 0.0)):.2f} s)")  # fmt: skip

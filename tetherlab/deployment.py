@@ -268,132 +268,38 @@ def p_view(p):
     return ParamView(p)
 
 
-def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect: int = 0,
-                  remap_defect: str | None = None) -> DeploymentResult:
-    """Run a scene with reels phase by phase (module docstring).  A failed phase ends the run and
-    keeps every output before it; a retrieval of the last rod stops it with the event
-    'reel.<tether>.retrieved'.  ``defect``: negative controls only (kernel/layout.py DEFECT_*);
-    ``remap_defect``: the same for the Python remap ("linear-only": retirements restore the
-    linear momentum only, as before section 6.3 of docs/deployment.md)."""
-    if remap_defect not in (None, "linear-only"):
-        raise ValueError(f"remap_defect: expected None or 'linear-only'; got {remap_defect!r}")
-    from .pipeline import SimulationError, _ProgressBar, prepare, run_outcome, run_segments, segment_plan
-    from .result import Result
+def phase_tables(tethers, ph: int, rods: dict, t, out, d) -> tuple[list, pd.DataFrame]:
+    """A phase's rows of the reel table (one frame per reel) and of the invariants, from the
+    kernel's reel rows ``out`` and the diagnostics ``d`` (:func:`_rows`)."""
     from .tether.reel_diagnostics import REEL_COLUMNS
 
-    tethers = reel_tethers(scene)
-    prep0 = prepare(scene)
-    t_out = prep0.t_out
-    t_end = float(t_out[-1])
-    check_law(scene, t_end)
-    bar = _ProgressBar(t_end, enabled=progress) if not callable(progress) else None
-    update = bar.update if bar is not None else progress
-    state = {t.name: t.rods for t in tethers}
-    knots = sorted({float(x) for t in tethers if t.reel.law == "table" for x in t.reel.times_s[1:-1]})
-    t_a = 0.0
-    y = prep0.y0
-    prep = prep0
-    phases, reel_parts, inv_parts, changes = [], [], [], []
-    status, message, stopped = 0, "", None
-    ph = 0
-    while True:
-        # the next birth or retirement of any reel
-        nxt = (math.inf, None, None)
-        for t in tethers:
-            tc, kind = next_change(t.reel, t.length_m, state[t.name], t_a, t_end)
-            if tc < nxt[0]:
-                nxt = (tc, kind, t)
-        # a table law's knots end a phase too, so that no step straddles the jump of L's third derivative
-        knot = min((k for k in knots if k > t_a * (1.0 + 1e-12) + 1e-9), default=math.inf)
-        if knot < nxt[0] and knot < t_end:
-            nxt = (knot, "knot", None)
-        t_b = min(nxt[0], t_end)
-        inside = t_out[(t_out > t_a) & (t_out < t_b)]
-        times = np.concatenate([[t_a], inside, [t_b]])
-        prep = replace(prep, y0=y, t_out=times, t0_s=t_a)
-        p_view(prep.model.p).defect = defect  # 0 in every user run
-        p = prep.model.fresh_params()
-        res = run_segments(prep, segment_plan(prep, p), update)
-        stats, msg = run_outcome(prep, res, p, 0.0)
-        out, d, _ = _rows(prep.model, res.t, res.y)
-        phases.append(Result.from_run(scene, prep, res.t, res.y, d, stats, res.status, msg, p))
-        g = d["global"]
-        for i, t in enumerate(tethers):
-            cols = {"t_s": res.t, "phase": ph, "reel": t.name, "rods": state[t.name]}
-            for c, name in enumerate(REEL_COLUMNS):
-                cols[name] = out[:, i, c]
-            cols["stored_length_m"] = t.length_m + t.reel.stored_length_m - out[:, i, 0]
-            reel_parts.append(pd.DataFrame(cols))
-        corr = out[:, :, 9:16].sum(axis=1)
-        inv = {"t_s": res.t, "phase": ph}
-        for j, ax in enumerate("xyz"):
-            inv[f"momentum_{ax}_N_s"] = g[:, diag.G_PX + j] + corr[:, j]
-        for j, ax in enumerate("xyz"):
-            inv[f"angmom_{ax}_kg_m2_s"] = g[:, diag.G_HX + j] + corr[:, 3 + j]
-        inv["kinetic_J"] = g[:, diag.G_KE] + corr[:, 6]
-        inv["energy_J"] = g[:, diag.G_E] + corr[:, 6]
-        inv["exit_power_W"] = out[:, :, 7].sum(axis=1)
-        inv_parts.append(pd.DataFrame(inv))
-        spool_change = _spool_change(stats.get("stopped_by"), tethers) if res.status == 0 else None
-        if spool_change is not None:  # a spool law's first rod reached a bound: located, the phase ends there
-            t_b = float(res.t[-1])
-            nxt = (t_b, spool_change[1], spool_change[0])
-            if spool_change[1] == "retire" and state[spool_change[0].name] == 1:
-                nxt = (t_b, "retrieved", spool_change[0])
-        elif res.status != 0 or res.stopped_by is not None:
-            status, message = res.status, msg
-            stopped = stats.get("stopped_by")
-            break
-        if nxt[1] is None or (t_b >= t_end and spool_change is None):
-            break
-        if nxt[1] == "knot":  # the same model goes on from the knot
-            y = res.y_end
-            t_a = t_b
-            ph += 1
-            continue
-        # a birth, a retirement, or the last rod retrieved: the phase ends at t_b
-        t = nxt[2]
-        reel = t.reel
-        n = state[t.name]
-        lay_old = prep.model.state
-        g0 = prep.model.rod_slices[[x.name for x in prep.model.tethers].index(t.name)].start
-        if reel.spool is not None:  # its length and rate are state
-            L, speed = (float(x) for x in res.y_end[prep.model.state.spool_of(_kernel_index(prep, t.name))])
-        else:
-            L = length_at(reel, t.length_m, t_b)
-            speed = speed_at(reel, t.length_m, t_b)
-        if nxt[1] == "retrieved":
-            stopped = f"reel.{t.name}.retrieved"
-            message = (f"run stopped at t = {t_b:.9g} s: the tether {t.name!r} was retrieved to its last rod's "
-                       f"retirement bound ({reel.retire_length_m:.6g} m deployed); outputs up to it are kept")  # fmt: skip
-            changes.append({"t_s": t_b, "reel": t.name, "change": "retrieved", "rods": n})
-            break
-        l_first = L - (n - 1) * reel.rod_length_m
-        n_new = n + 1 if nxt[1] == "birth" else n - 1
-        state[t.name] = n_new
-        nxt_prep = prepare(scene, reel_phase={"first": prep0, "rods": {
-            x.name: (state[x.name], _deployed(x, prep, res.y_end, t_b)) for x in tethers}})  # fmt: skip
-        lay_new = nxt_prep.model.state
-        y_end = res.y_end
-        if nxt[1] == "birth":
-            y = birth_state(lay_old, lay_new, y_end, g0, l_first, l_first - reel.rod_length_m, speed)
-        else:
-            k = [x.name for x in prep.model.tethers].index(t.name)
-            rho = t.mass_kg / t.length_m
-            y = retire_state(prep.model, nxt_prep.model, y_end, k, rho, l_first, reel.rod_length_m, speed, t_b,
-                             angular=remap_defect != "linear-only")
-        changes.append({"t_s": t_b, "reel": t.name, "change": nxt[1], "rods": n_new})
-        prep = nxt_prep
-        t_a = t_b
-        ph += 1
-    if bar is not None:
-        bar.close()
-    reel_df = pd.concat(reel_parts, ignore_index=True)
-    inv_df = pd.concat(inv_parts, ignore_index=True)
-    # the energy taken out at the exit, integrated phase by phase (trapezoid on the outputs;
-    # docs/deployment.md 8 says how fine the outputs must be for the energy gate)
+    g = d["global"]
+    reel_parts = []
+    for i, tt in enumerate(tethers):
+        cols = {"t_s": t, "phase": ph, "reel": tt.name, "rods": rods[tt.name]}
+        for c, name in enumerate(REEL_COLUMNS):
+            cols[name] = out[:, i, c]
+        cols["stored_length_m"] = tt.length_m + tt.reel.stored_length_m - out[:, i, 0]
+        reel_parts.append(pd.DataFrame(cols))
+    corr = out[:, :, 9:16].sum(axis=1)
+    inv = {"t_s": t, "phase": ph}
+    for j, ax in enumerate("xyz"):
+        inv[f"momentum_{ax}_N_s"] = g[:, diag.G_PX + j] + corr[:, j]
+    for j, ax in enumerate("xyz"):
+        inv[f"angmom_{ax}_kg_m2_s"] = g[:, diag.G_HX + j] + corr[:, 3 + j]
+    inv["kinetic_J"] = g[:, diag.G_KE] + corr[:, 6]
+    inv["energy_J"] = g[:, diag.G_E] + corr[:, 6]
+    inv["exit_power_W"] = out[:, :, 7].sum(axis=1)
+    return reel_parts, pd.DataFrame(inv)
+
+
+def integrated_tables(reel_df: pd.DataFrame, inv_df: pd.DataFrame) -> None:
+    """Add the energies taken out at the exit, integrated phase by phase over the whole run
+    (trapezoid on the outputs; docs/deployment.md 8 says how fine the outputs must be for the
+    energy gate): ``exit_work_J`` and ``energy_plus_exit_work_J`` to the invariants, ``carnot_J``
+    to the reel table.  A phase's first row repeats its predecessor's last time (the same instant
+    in the next layout), so no interval spans two phases."""
     work = np.zeros(len(inv_df))
-    carnot = np.zeros(len(reel_df))
     acc = 0.0
     prev = None
     for idx, row in enumerate(inv_df.itertuples()):
@@ -403,7 +309,8 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
         prev = row
     inv_df["exit_work_J"] = work
     inv_df["energy_plus_exit_work_J"] = inv_df["energy_J"] + work
-    for name, part in reel_df.groupby("reel", sort=False):
+    carnot = np.zeros(len(reel_df))
+    for _, part in reel_df.groupby("reel", sort=False):
         c = 0.0
         tt = part["t_s"].to_numpy()
         cp = part["carnot_power_W"].to_numpy()
@@ -418,14 +325,165 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
     # a spool law's brake work and exit loss, integrated as the exit work (docs/deployment.md 10.3)
     for col, power in (("brake_work_J", "brake_power_W"), ("exit_loss_J", "exit_loss_power_W")):
         vals = np.zeros(len(reel_df))
-        for name, part in reel_df.groupby("reel", sort=False):
+        for _, part in reel_df.groupby("reel", sort=False):
             tt, pw, phs = (part[c].to_numpy() for c in ("t_s", power, "phase"))
             acc_ = np.zeros(len(part))
             for j in range(1, len(part)):
                 acc_[j] = acc_[j - 1] + (0.5 * (pw[j] + pw[j - 1]) * (tt[j] - tt[j - 1]) if phs[j] == phs[j - 1] else 0.0)
             vals[part.index.to_numpy()] = acc_
         reel_df[col] = vals
-    result = DeploymentResult(phases, reel_df, inv_df, changes, status, message, stopped)
+
+
+class MemoryPhases:
+    """The phases of :func:`run_phases` kept in memory (``simulate``): one Result per phase, the
+    reel and invariant rows.  The run store's counterpart, written to a run directory as it goes,
+    is tetherlab/reelstore.py; both answer the same four calls."""
+
+    resume = None  # a loop state to continue from (the run store's checkpoint); None: from the start
+    prepare_options: dict = {}
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.phases, self.reel_parts, self.inv_parts = [], [], []
+
+    def start_phase(self, loop: dict) -> None:
+        """Called with the loop's state before each phase (the run store checkpoints it)."""
+
+    def run_phase(self, loop: dict, prep, p, update):
+        from .pipeline import run_segments, segment_plan
+
+        return run_segments(prep, segment_plan(prep, p), update), p
+
+    def end_phase(self, loop: dict, prep, res, stats: dict, message: str, p, d, reel_parts, inv) -> None:
+        from .result import Result
+
+        self.phases.append(Result.from_run(self.scene, prep, res.t, res.y, d, stats, res.status, message, p))
+        self.reel_parts.extend(reel_parts)
+        self.inv_parts.append(inv)
+
+
+def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str | None = None):
+    """The one phase loop of a scene with reels (module docstring), for ``simulate`` (``sink`` a
+    :class:`MemoryPhases`) and for ``tetherlab run`` (tetherlab/reelstore.py).  Between phases
+    the loop's whole state is ``loop`` (phase index, start time and state, rods per reel tether,
+    the rods and lengths the current model was built with, the changes so far): the sink is
+    handed it before each phase, and a sink with ``resume`` set continues from one.  Returns
+    (status, message, stopped_by, changes).  ``remap_defect``: negative controls of the Python
+    remap only ("linear-only": retirements restore the linear momentum only, as before section 6.3
+    of docs/deployment.md)."""
+    if remap_defect not in (None, "linear-only"):
+        raise ValueError(f"remap_defect: expected None or 'linear-only'; got {remap_defect!r}")
+    from .pipeline import _ProgressBar, prepare, run_outcome
+
+    tethers = reel_tethers(scene)
+    opts = sink.prepare_options
+    prep0 = prepare(scene, **opts)
+    t_out = prep0.t_out
+    t_end = float(t_out[-1])
+    check_law(scene, t_end)
+    bar = _ProgressBar(t_end, enabled=progress) if not callable(progress) else None
+    update = bar.update if bar is not None else progress
+    knots = sorted({float(x) for t in tethers if t.reel.law == "table" for x in t.reel.times_s[1:-1]})
+    loop = sink.resume or {"phase": 0, "t_a": 0.0, "y": prep0.y0, "rods": {t.name: t.rods for t in tethers},
+                           "model_rods": None, "changes": []}  # fmt: skip
+    # the model of the phase: the first one's, or rebuilt after the last birth or retirement
+    prep = prep0
+    if loop["model_rods"] is not None:
+        prep = prepare(scene, reel_phase={"first": prep0, "rods": loop["model_rods"]}, **opts)
+    status, message, stopped = 0, "", None
+    try:
+        while True:
+            t_a, y, state, ph, changes = loop["t_a"], loop["y"], loop["rods"], loop["phase"], loop["changes"]
+            # the next birth or retirement of any reel
+            nxt = (math.inf, None, None)
+            for t in tethers:
+                tc, kind = next_change(t.reel, t.length_m, state[t.name], t_a, t_end)
+                if tc < nxt[0]:
+                    nxt = (tc, kind, t)
+            # a table law's knots end a phase too, so that no step straddles the jump of L's third derivative
+            knot = min((k for k in knots if k > t_a * (1.0 + 1e-12) + 1e-9), default=math.inf)
+            if knot < nxt[0] and knot < t_end:
+                nxt = (knot, "knot", None)
+            t_b = min(nxt[0], t_end)
+            inside = t_out[(t_out > t_a) & (t_out < t_b)]
+            times = np.concatenate([[t_a], inside, [t_b]])
+            prep = replace(prep, y0=y, t_out=times, t0_s=t_a)
+            p_view(prep.model.p).defect = defect  # 0 in every user run
+            sink.start_phase(loop)
+            res, p = sink.run_phase(loop, prep, prep.model.fresh_params(), update)
+            stats, msg = run_outcome(prep, res, p, 0.0)
+            out, d, _ = _rows(prep.model, res.t, res.y)
+            reel_parts, inv = phase_tables(tethers, ph, state, res.t, out, d)
+            sink.end_phase(loop, prep, res, stats, msg, p, d, reel_parts, inv)
+            spool_change = _spool_change(stats.get("stopped_by"), tethers) if res.status == 0 else None
+            if spool_change is not None:  # a spool law's first rod reached a bound: located, the phase ends there
+                t_b = float(res.t[-1])
+                nxt = (t_b, spool_change[1], spool_change[0])
+                if spool_change[1] == "retire" and state[spool_change[0].name] == 1:
+                    nxt = (t_b, "retrieved", spool_change[0])
+            elif res.status != 0 or res.stopped_by is not None:
+                status, message = res.status, msg
+                stopped = stats.get("stopped_by")
+                break
+            if nxt[1] is None or (t_b >= t_end and spool_change is None):
+                break
+            if nxt[1] == "knot":  # the same model goes on from the knot
+                loop = dict(loop, phase=ph + 1, t_a=t_b, y=res.y_end)
+                continue
+            # a birth, a retirement, or the last rod retrieved: the phase ends at t_b
+            t = nxt[2]
+            reel = t.reel
+            n = state[t.name]
+            lay_old = prep.model.state
+            g0 = prep.model.rod_slices[[x.name for x in prep.model.tethers].index(t.name)].start
+            if reel.spool is not None:  # its length and rate are state
+                L, speed = (float(x) for x in res.y_end[prep.model.state.spool_of(_kernel_index(prep, t.name))])
+            else:
+                L = length_at(reel, t.length_m, t_b)
+                speed = speed_at(reel, t.length_m, t_b)
+            if nxt[1] == "retrieved":
+                stopped = f"reel.{t.name}.retrieved"
+                message = (f"run stopped at t = {t_b:.9g} s: the tether {t.name!r} was retrieved to its last rod's "
+                           f"retirement bound ({reel.retire_length_m:.6g} m deployed); outputs up to it are kept")  # fmt: skip
+                changes.append({"t_s": t_b, "reel": t.name, "change": "retrieved", "rods": n})
+                break
+            l_first = L - (n - 1) * reel.rod_length_m
+            n_new = n + 1 if nxt[1] == "birth" else n - 1
+            state = dict(state, **{t.name: n_new})
+            model_rods = {x.name: (state[x.name], _deployed(x, prep, res.y_end, t_b)) for x in tethers}
+            nxt_prep = prepare(scene, reel_phase={"first": prep0, "rods": model_rods}, **opts)
+            lay_new = nxt_prep.model.state
+            y_end = res.y_end
+            if nxt[1] == "birth":
+                y = birth_state(lay_old, lay_new, y_end, g0, l_first, l_first - reel.rod_length_m, speed)
+            else:
+                k = [x.name for x in prep.model.tethers].index(t.name)
+                rho = t.mass_kg / t.length_m
+                y = retire_state(prep.model, nxt_prep.model, y_end, k, rho, l_first, reel.rod_length_m, speed, t_b,
+                                 angular=remap_defect != "linear-only")
+            changes = changes + [{"t_s": t_b, "reel": t.name, "change": nxt[1], "rods": n_new}]
+            prep = nxt_prep
+            loop = {"phase": ph + 1, "t_a": t_b, "y": y, "rods": state, "model_rods": model_rods, "changes": changes}
+    finally:
+        if bar is not None:
+            bar.close()
+    return status, message, stopped, loop["changes"]
+
+
+def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect: int = 0,
+                  remap_defect: str | None = None) -> DeploymentResult:
+    """Run a scene with reels phase by phase (module docstring), in memory.  A failed phase ends
+    the run and keeps every output before it; a retrieval of the last rod stops it with the event
+    'reel.<tether>.retrieved'.  ``defect``: negative controls only (kernel/layout.py DEFECT_*)."""
+    from .pipeline import SimulationError
+
+    sink = MemoryPhases(scene)
+    status, message, stopped, changes = run_phases(scene, sink, progress=progress, defect=defect,
+                                                  remap_defect=remap_defect)
+    reel_df = pd.concat(sink.reel_parts, ignore_index=True)
+    inv_df = pd.concat(sink.inv_parts, ignore_index=True)
+    integrated_tables(reel_df, inv_df)
+    result = DeploymentResult(sink.phases, reel_df, inv_df, changes, status, message, stopped)
     if status != 0 and raise_on_failure:
-        raise SimulationError(message, phases[-1])
+        raise SimulationError(message, sink.phases[-1])
     return result

@@ -573,7 +573,9 @@ class SegmentPlan:
     segment); ``enter(t_a, y) -> (z, ctx)``: the formulation state at a segment's start from the
     Cowell state there (re-anchoring what the segment needs in ``pe``); ``leave(ctx, t, Z)``: Cowell
     rows from formulation rows ``Z`` at the times ``t``; ``anchor(ctx)``: what the run's stats keep
-    of a segment (None: nothing)."""
+    of a segment (None: nothing); ``rowwise``: ``leave`` turns each row on its own, so a run store
+    may turn a segment's rows into Cowell rows as the driver writes them (the same bits as at the
+    segment's end) instead of when it ends."""
 
     pe: np.ndarray
     rhs: object
@@ -584,6 +586,7 @@ class SegmentPlan:
     enter: object
     leave: object
     anchor: object = None
+    rowwise: bool = False
 
 
 def segment_plan(prep: Prepared, p: np.ndarray) -> SegmentPlan:
@@ -628,7 +631,7 @@ def segment_plan(prep: Prepared, p: np.ndarray) -> SegmentPlan:
 
         return SegmentPlan(pe, dromo.dromo_time_rhs, dromo.dromo_time_events if events is not None else None,
                            atol, False, math.inf, lambda t_a, y: (dromo.time_state(y, lay, mu, length_m), None),
-                           leave)  # fmt: skip
+                           leave, rowwise=True)  # fmt: skip
     raise ValueError(f"formulation {prep.formulation!r}: expected one run by segments")
 
 

@@ -10,7 +10,8 @@
 * ``altitude.png``, ``elements.png``: altitude, and the osculating a, e, i, Ω, ω of the centre of
   mass, against days for runs of days (every run about a central body);
 * ``ground-track.png``: geodetic latitude and longitude (runs about the Earth);
-* ``attitude.png`` per rigid body: roll, pitch, yaw, body rates, wheel speeds, control torque.
+* ``attitude.png`` per rigid body: roll, pitch, yaw, body rates, wheel speeds, control torque;
+* a run with reels: ``deployment.png`` and its own ``invariants.png`` (tetherlab/plots_reel.py).
 
 Long runs (more than ``MAX_POINTS`` outputs) are drawn as the band between the minimum and the
 maximum of each bin of outputs with the bin mean on it (``ENVELOPE_BINS`` bins), not as thousands of overlapping oscillations. Angles are
@@ -171,7 +172,12 @@ def figures(run_dir) -> dict:
         ax.legend(fontsize=8)
         figs["tension.png"] = fig
 
-    figs["invariants.png"] = _invariants(plt, res, tx, xlabel)
+    if res.meta.get("reel"):  # a deployment: its material invariants and the reel (plots_reel.py)
+        from .plots_reel import reel_figures
+
+        figs.update(reel_figures(plt, run_dir, lambda t: time_axis(t, period)))
+    else:
+        figs["invariants.png"] = _invariants(plt, res, tx, xlabel)
     if tethers and ts.shape[0] > 0:
         figs["shape.png"] = _shape(plt, res, tethers)
     if "altitude_m" in dg.columns:

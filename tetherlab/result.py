@@ -206,7 +206,11 @@ class Result:
         tetherlab/runstore.py; an interrupted run loads with the rows computed so far)."""
         out = Path(out_dir)
         run = json.loads((out / "run.json").read_text())
-        if (out / "timeseries").is_dir():
+        if run.get("reel"):  # phases of their own rod counts, read back as one table (reelstore.py)
+            from .reelstore import read_tables
+
+            ts, dg = read_tables(out)
+        elif (out / "timeseries").is_dir():
             ts, dg = (_read_parts(out / name) for name in ("timeseries", "diagnostics"))
         else:
             ts = pd.read_csv(out / "timeseries.csv")

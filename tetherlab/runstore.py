@@ -42,7 +42,9 @@ state layout.  Cowell rows go straight into ``states.npy``; another formulation'
 ``segments/seg-KKKKK.npy`` (its own state, ``(rows of the segment, its state length)``) and are
 turned into Cowell rows of ``states.npy`` when the segment ends, so ``states.npy`` and the
 Parquet parts are one Cowell table whatever the formulation (parts are written as their rows are
-final: per chunk for Cowell, per segment otherwise).  The checkpoint adds the loop's own state
+final: per chunk for Cowell and for DROMO's time form, whose rows turn into Cowell rows one by one
+(``SegmentPlan.rowwise``: they are converted after every chunk, the same bits as at the end), per
+segment for cowell-orbit).  The checkpoint adds the loop's own state
 (segment index, its start time and Cowell start state, the rows before it, the step budget, the
 summed statistics, the events, the frame anchors): a resumed run re-enters the same segment with
 the same anchor and continues the driver from its checkpoint, so it is identical across segments
@@ -174,6 +176,7 @@ def _part_name(k: int) -> str:
 class _Store:
     def __init__(self, out: Path, scene, prep, part_rows: int):
         self.out = out
+        self.checkpoint_dir = out  # a reel run's phases share the run's one checkpoint
         self.scene = scene
         self.prep = prep
         self.part_rows = int(part_rows)
@@ -294,12 +297,10 @@ def run_to_dir(scene, out_dir, *, progress=None, checkpoint_s: float = 5.0, part
                 f"`tetherlab run --resume {out}`, or choose another --out"
             )
     check_writable(out)
-    for t in scene.tethers:
-        if t.reel is not None:  # its phases change the model the store writes (docs/deployment.md 9)
-            from .errors import SceneError
+    if any(t.reel is not None for t in scene.tethers):  # phases of changing rod counts (reelstore.py)
+        from . import reelstore
 
-            raise SceneError(f"tethers.{t.name}.reel", "a scene without a reel for a run written as it goes (a "
-                             "deployment is run phase by phase: tetherlab.simulate(scene))", "a reel")  # fmt: skip
+        return reelstore.run_to_dir(scene, out, progress=progress, checkpoint_s=checkpoint_s, part_rows=part_rows)
     prep = prepare(scene, outputs_in_memory=False, out_dir=out)
     if not _streamable(prep):  # integrated in memory, written at the end
         from .resources import check_scene
@@ -361,6 +362,10 @@ def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
         )
     check_writable(out)
     scene = Scene.from_dict(record["scene"])
+    if record.get("reel"):
+        from . import reelstore
+
+        return reelstore.resume(scene, out, record, progress=progress, checkpoint_s=checkpoint_s)
     prep = prepare(scene, outputs_in_memory=False, out_dir=out)
     m = int(prep.t_out.size)
     if m != record["rows"] or prep.model.state.size != record["state_length"]:
@@ -372,24 +377,7 @@ def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
     ck = out / CHECKPOINT
     if ck.exists() and (out / STATES).exists():
         with np.load(ck, allow_pickle=False) as z:
-            restart = _sigma_restart(z) if "sigma_k" in z.files else {
-                # the kernel's whole block (the model's, with the formulation's block appended)
-                "p_full": z["p"].copy(),
-                "t": float(z["t"]), "h": float(z["h"]), "done": int(z["done"]), "budget": int(z["budget"]),
-                "y": z["y"].copy(), "stats": z["stats"].copy(), "ev": z["ev"].copy(),
-                "ws": [z[f"ws{i}"].copy() for i in range(int(z["n_ws"]))], "resume": bool(z["resume"]),
-                "events": [tuple(e) for e in z["events"].tolist()], "sides": z["sides"].tolist(),
-                "wall_s": float(z["wall_s"]), "n_chunks": int(z["n_chunks"]),
-                # the segment loop's state (pipeline.run_segments) and the driver's rows in it
-                "seg_done": int(z["seg_done"]),
-                "loop": {
-                    "k": int(z["seg_k"]), "t_a": float(z["seg_t_a"]), "y_in": z["seg_y_in"].copy(),
-                    "k_out": int(z["seg_k_out"]), "budget": int(z["seg_budget"]),
-                    "sums": json.loads(str(z["seg_sums"])),
-                    "events": [(float(a), int(b), float(c)) for a, b, c in z["seg_events"].tolist()],
-                    "anchors": json.loads(str(z["seg_anchors"])),
-                },
-            }  # fmt: skip
+            restart = _sigma_restart(z) if "sigma_k" in z.files else driver_restart(z)
         states = np.lib.format.open_memmap(out / STATES, mode="r+")
         if states.shape != (m, prep.model.state.size):
             raise RunDirError(f"{str(out / STATES)!r}: shape {states.shape}, expected {(m, prep.model.state.size)}")
@@ -399,6 +387,42 @@ def resume_dir(out_dir, *, progress=None, checkpoint_s: float = 5.0):
     # Parts past the checkpoint (written after it, or a partial last part) are rebuilt.
     store.drop_parts_from(done // store.part_rows)
     return _run_streamed(store, record, states, p, restart, progress, checkpoint_s)
+
+
+def driver_restart(z) -> dict:
+    """The segment loop's and the driver's state from a checkpoint (written by
+    :func:`stream_segments`), as ``_SegmentStore`` and ``run_segments`` take it."""
+    return {
+        # the kernel's whole block (the model's, with the formulation's block appended)
+        "p_full": z["p"].copy(),
+        "t": float(z["t"]), "h": float(z["h"]), "done": int(z["done"]), "budget": int(z["budget"]),
+        "y": z["y"].copy(), "stats": z["stats"].copy(), "ev": z["ev"].copy(),
+        "ws": [z[f"ws{i}"].copy() for i in range(int(z["n_ws"]))], "resume": bool(z["resume"]),
+        "events": [tuple(e) for e in z["events"].tolist()], "sides": z["sides"].tolist(),
+        "wall_s": float(z["wall_s"]), "n_chunks": int(z["n_chunks"]),
+        # the segment loop's state (pipeline.run_segments) and the driver's rows in it
+        "seg_done": int(z["seg_done"]),
+        "loop": {
+            "k": int(z["seg_k"]), "t_a": float(z["seg_t_a"]), "y_in": z["seg_y_in"].copy(),
+            "k_out": int(z["seg_k_out"]), "budget": int(z["seg_budget"]),
+            "sums": json.loads(str(z["seg_sums"])),
+            "events": [(float(a), int(b), float(c)) for a, b, c in z["seg_events"].tolist()],
+            "anchors": json.loads(str(z["seg_anchors"])),
+        },
+    }  # fmt: skip
+
+
+class Clock:
+    """The wall time of a run over all its sessions (``before``: the sessions before this one) and
+    the time of the last checkpoint."""
+
+    def __init__(self, before: float = 0.0):
+        self.before = before
+        self.start = time.perf_counter()
+        self.last_checkpoint = self.start
+
+    def wall_s(self) -> float:
+        return self.before + time.perf_counter() - self.start
 
 
 class _Signals:
@@ -431,8 +455,12 @@ def _plain(x):
 class _SegmentStore:
     """The streamed run's side of the segment loop (the ``store`` of pipeline.run_segments)."""
 
-    def __init__(self, store: _Store, states, p, restart, on_chunk):
+    def __init__(self, store: _Store, states, p, restart, on_chunk, leave=None):
         self.store = store
+        # a formulation whose rows turn into Cowell rows one by one (SegmentPlan.rowwise): its rows
+        # go into states.npy, and full parts are written, after every chunk, not at the segment's end
+        self.leave = leave
+        self.converted = 0  # rows of the running segment already in states.npy
         self.states = states
         self.p = p
         self.on_chunk = on_chunk
@@ -451,6 +479,9 @@ class _SegmentStore:
         if self.restart is not None and k == self.resume["k"]:
             restart = dict(self.restart, done=self.restart["seg_done"])
         self.restart = None
+        self.seg_t, self.ctx = seg_t, ctx
+        # (a resumed segment: the rows before its checkpoint were converted and flushed with it)
+        self.converted = restart["seg_done"] if restart is not None else 0
         if self.direct:
             self.y_out = self.states[loop["k_out"] : loop["k_out"] + seg_t.size]
         else:
@@ -466,8 +497,20 @@ class _SegmentStore:
         return {"y_out": self.y_out, "checkpoint": self._chunk, "restart": restart}
 
     def _chunk(self, state):
-        # rows final in states.npy: the driver's for Cowell, else those of the segments done
-        done = self.loop["k_out"] + state["done"] if self.direct else self.loop["k_out"]
+        # rows final in states.npy: the driver's for Cowell, those converted so far for a row-wise
+        # formulation, else those of the segments done
+        k_out = self.loop["k_out"]
+        if self.direct:
+            done = k_out + state["done"]
+        elif self.leave is not None:
+            b = min(int(state["done"]), self.states.shape[0] - k_out)
+            a = self.converted
+            if b > a:
+                self.states[k_out + a : k_out + b] = self.leave(self.ctx, self.seg_t[a:b], self.y_out[a:b])
+                self.converted = b
+            done = k_out + self.converted
+        else:
+            done = k_out
         self.on_chunk(state, done, self.loop, self.y_out)
 
     def end(self, k, k_out, t, y_rows) -> None:
@@ -486,14 +529,17 @@ class _SegmentStore:
         return dataclasses.replace(res, t=t[:rows], y=self.states[:rows], y_end=y_end, stats=stats, events=events)
 
 
-def _run_streamed(store: _Store, record: dict, states, p, restart, progress, checkpoint_s):
-    from .integrators.driver import IntegrationResult  # noqa: F401  (the result type returned below)
-    from .pipeline import _ProgressBar, run_segments, segment_plan
+def stream_segments(store: _Store, states, p, restart, update, sig, checkpoint_s: float, clock: Clock,
+                    chunks_before: int, interrupted, extra=None):
+    """Run the store's prepared model through the one segment loop, rows into ``states``, full
+    Parquet parts as they complete, a checkpoint every ``checkpoint_s`` of wall time and when a
+    signal was caught (``sig.hit``), after which ``interrupted(state, done)`` is called and must
+    raise.  ``extra()``: more arrays for every checkpoint (a reel run's phase loop).  Returns the
+    loop's result and the parameter block the kernels wrote."""
+    from .pipeline import run_segments, segment_plan
 
     prep = store.prep
     out = store.out
-    if prep.formulation == "dromo-sigma":
-        return _run_sigma_streamed(store, record, states, p, restart, progress, checkpoint_s)
     plan = segment_plan(prep, p)
     if restart is not None:
         if restart["p_full"].shape != plan.pe.shape:
@@ -505,14 +551,6 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
     if restart is not None:
         store.events = list(restart["loop"]["events"]) + list(restart["events"])
         store.write_full_parts(states, restart["done"], p, have)  # any a kill left unwritten
-    wall_before = restart["wall_s"] if restart else 0.0
-    chunks_before = restart["n_chunks"] if restart else 0
-    record["segments"] = int(record.get("segments", 0)) + 1
-    record["state"] = "running"
-    _write_json(out / RUN_JSON, record)
-    bar = _ProgressBar(prep.t_out[-1], enabled=progress)
-    t_wall = time.perf_counter()
-    last_ck = [time.perf_counter()]
 
     def save_checkpoint(state, done, loop, y_out):
         states.flush()
@@ -520,46 +558,68 @@ def _run_streamed(store: _Store, record: dict, states, p, restart, progress, che
         arrays = {f"ws{i}": a for i, a in enumerate(state["ws"])}
         ev = np.array(state["events"], dtype=float).reshape(-1, 3)
         _write_checkpoint(
-            out, t=state["t"], h=state["h"], done=done, budget=state["budget"], y=state["y"],
+            store.checkpoint_dir, t=state["t"], h=state["h"], done=done, budget=state["budget"], y=state["y"],
             stats=state["stats"], ev=state["ev"], resume=state["resume"], events=ev, p=p,
             sides=np.asarray(state["sides"], float),
-            n_ws=len(state["ws"]), wall_s=wall_before + time.perf_counter() - t_wall,
+            n_ws=len(state["ws"]), wall_s=clock.wall_s(),
             n_chunks=chunks_before, seg_done=state["done"], seg_k=loop["k"], seg_t_a=loop["t_a"],
             seg_y_in=np.asarray(loop["y_in"], float), seg_k_out=loop["k_out"], seg_budget=loop["budget"],
             seg_sums=json.dumps(loop["sums"], default=_plain),
             seg_anchors=json.dumps(loop["anchors"], default=_plain),
-            seg_events=np.array(loop["events"], dtype=float).reshape(-1, 3), **arrays,
+            seg_events=np.array(loop["events"], dtype=float).reshape(-1, 3), **arrays, **(extra() if extra else {}),
         )  # fmt: skip
-        last_ck[0] = time.perf_counter()
+        clock.last_checkpoint = time.perf_counter()
+
+    def on_chunk(state, done, loop, y_out):
+        store.events = list(loop["events"]) + list(state["events"])
+        store.write_full_parts(states, done, p, have)
+        if sig.hit is not None or time.perf_counter() - clock.last_checkpoint >= checkpoint_s:
+            save_checkpoint(state, done, loop, y_out)
+        if sig.hit is not None:
+            k = done // store.part_rows
+            a = k * store.part_rows
+            if done > a:  # the rows of the unfinished part, readable now, rebuilt on resume
+                store.write_part(k, prep.t_out[a:done], states[a:done], p, None if a == 0 else states[0])
+            interrupted(state, done)
+
+    seg_store = _SegmentStore(store, states, p, restart, on_chunk, plan.leave if plan.rowwise else None)
+    seg_store.have = have
+    return run_segments(prep, plan, update, store=seg_store), p
+
+
+def _run_streamed(store: _Store, record: dict, states, p, restart, progress, checkpoint_s):
+    from .pipeline import _ProgressBar
+
+    prep = store.prep
+    out = store.out
+    if prep.formulation == "dromo-sigma":
+        return _run_sigma_streamed(store, record, states, p, restart, progress, checkpoint_s)
+    wall_before = restart["wall_s"] if restart else 0.0
+    chunks_before = restart["n_chunks"] if restart else 0
+    record["segments"] = int(record.get("segments", 0)) + 1
+    record["state"] = "running"
+    _write_json(out / RUN_JSON, record)
+    bar = _ProgressBar(prep.t_out[-1], enabled=progress)
+    clock = Clock(wall_before)
 
     with _Signals() as sig:
 
-        def on_chunk(state, done, loop, y_out):
-            store.events = list(loop["events"]) + list(state["events"])
-            store.write_full_parts(states, done, p, have)
-            if sig.hit is not None or time.perf_counter() - last_ck[0] >= checkpoint_s:
-                save_checkpoint(state, done, loop, y_out)
-            if sig.hit is not None:
-                k = done // store.part_rows
-                a = k * store.part_rows
-                if done > a:  # the rows of the unfinished part, readable now, rebuilt on resume
-                    store.write_part(k, prep.t_out[a:done], states[a:done], p, None if a == 0 else states[0])
-                record["state"] = "interrupted"
-                record["message"] = f"interrupted (signal {sig.hit}) at t = {state['t']:.9g} s"
-                record["t_s"] = state["t"]
-                record["rows_done"] = done
-                _write_json(out / RUN_JSON, record)
-                raise Interrupted(out, state["t"], float(prep.t_out[-1]), done)
+        def interrupted(state, done):
+            record["state"] = "interrupted"
+            record["message"] = f"interrupted (signal {sig.hit}) at t = {state['t']:.9g} s"
+            record["t_s"] = state["t"]
+            record["rows_done"] = done
+            _write_json(out / RUN_JSON, record)
+            raise Interrupted(out, state["t"], float(prep.t_out[-1]), done)
 
-        seg_store = _SegmentStore(store, states, p, restart, on_chunk)
-        seg_store.have = have
         try:
-            res = run_segments(prep, plan, bar.update, store=seg_store)
+            res, p = stream_segments(store, states, p, restart, bar.update, sig, checkpoint_s, clock, chunks_before,
+                                     interrupted)  # fmt: skip
         finally:
             bar.close()
         # (still under the handlers: a signal now, with the integration done, lets it finish)
-        return _finish(store, record, res, p, states, wall_before + time.perf_counter() - t_wall, chunks_before,
-                       session_start=t_wall, trace=bar.trace)  # fmt: skip
+        return _finish(store, record, res, p, states, clock.wall_s(), chunks_before, session_start=clock.start,
+                       trace=bar.trace)  # fmt: skip
 
 
 def _sigma_restart(z) -> dict:
@@ -670,8 +730,13 @@ def _run_in_memory(store: _Store, record: dict, progress):
 
 
 def _regime_warnings(store: _Store, trace) -> list[dict]:
+    return regime_warnings(store.scene, [store.out], trace)
+
+
+def regime_warnings(scene, outs, trace) -> list[dict]:
     """The run summary's warnings (tetherlab/regime.py), from the columns they need read back
-    from the parts on disk one part at a time (strains, axial forces, libration angles)."""
+    from the parts on disk one part at a time (strains, axial forces, libration angles), over the
+    run directories ``outs`` in order (a reel run's phases: tetherlab/reelstore.py)."""
     import pyarrow.parquet as pq
 
     from .regime import check_parts
@@ -680,23 +745,19 @@ def _regime_warnings(store: _Store, trace) -> list[dict]:
         return c == "t_s" or c.endswith((".strain", ".axial_force_N", ".theta_rad", ".phi_rad"))
 
     def parts():
-        folders = [store.out / name for name in TABLES]
-        files = [sorted(f.glob("part-*.parquet")) for f in folders]
-        for ts_file, dg_file in zip(*files):
-            yield tuple(pq.read_table(f, columns=[c for c in pq.read_schema(f).names if wanted(c)]).to_pandas()
-                        for f in (ts_file, dg_file))  # fmt: skip
+        for out in outs:
+            folders = [out / name for name in TABLES]
+            files = [sorted(f.glob("part-*.parquet")) for f in folders]
+            for ts_file, dg_file in zip(*files):
+                yield tuple(pq.read_table(f, columns=[c for c in pq.read_schema(f).names if wanted(c)]).to_pandas()
+                            for f in (ts_file, dg_file))  # fmt: skip
 
-    return check_parts(store.scene, parts(), trace)
+    return check_parts(scene, parts(), trace)
 
 
-def _finish(store: _Store, record: dict, res, p, states, wall_s: float, chunks_before: int,
-            session_start: float | None = None, trace=()) -> dict:
-    from .pipeline import run_outcome
-    from .result import library_versions
-
-    t_finish = time.perf_counter()
-    prep = store.prep
-    out = store.out
+def write_last_parts(store: _Store, res, p, states) -> int:
+    """The parts a run's end leaves to write (the last, partial one, and any not on disk); returns
+    the number of output rows."""
     rows = int(len(res.t))
     # the driver returns a view of the states file, with a terminal event's stop row in the first
     # unreached row; only a stop after the last output time comes back as a copy in memory
@@ -711,6 +772,18 @@ def _finish(store: _Store, record: dict, res, p, states, wall_s: float, chunks_b
         if k in have and b - a == B:
             continue
         store.write_part(k, res.t[a:b], Y[a:b], p, None if a == 0 else Y[0])
+    return rows
+
+
+def _finish(store: _Store, record: dict, res, p, states, wall_s: float, chunks_before: int,
+            session_start: float | None = None, trace=()) -> dict:
+    from .pipeline import run_outcome
+    from .result import library_versions
+
+    t_finish = time.perf_counter()
+    prep = store.prep
+    out = store.out
+    rows = write_last_parts(store, res, p, states)
     stats, message = run_outcome(prep, res, p, wall_s)
     stats["wall_s"] = wall_s
     stats["n_chunks"] = int(stats.get("n_chunks", 0)) + chunks_before
