@@ -49,7 +49,7 @@ from ..kernel.layout import (
     TT_SIZE,
 )
 from .chain import chain_back_substitute, chain_reduce
-from .rod import SQ3, next_joint, rod_force, rod_share
+from .rod import SQ3, next_joint, rod_constants, rod_force, rod_share
 
 __all__ = ["inextensible_walk", "inextensible_back_substitute", "walk", "reduce", "back_substitute", "share"]
 
@@ -99,9 +99,10 @@ def inextensible_walk(t, q, qd, p, k, with_forces, ax, ay, az, avx, avy, avz):
     tb = int(p[H_OFF_TETH]) + k * TT_SIZE
     n = int(p[tb + TT_NRODS])
     g0 = int(p[tb + TT_ROD0])
+    rc = rod_constants(p)
     for g in range(g0, g0 + n):
         if with_forces:
-            code = rod_force(t, q, qd, p, g, False, False, False, ax, ay, az, avx, avy, avz)
+            code = rod_force(t, q, qd, p, g, rc, False, False, False, ax, ay, az, avx, avy, avz)
             if code != 0:
                 return code, ax, ay, az, avx, avy, avz
             _constrain(q, qd, p, g)

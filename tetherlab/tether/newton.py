@@ -294,7 +294,8 @@ def form_blocks(t, y, p, m1, blk):
     (reel_update, as the rhs does): its strain eps = |D|/l - 1 against the length of another
     time is off by l' dt/l, which on a light line is many times the true strain, and the
     geometric stiffness fe/l made of it is then wrong by as much (docs/deployment.md 8b)."""
-    if int(p[H_NREEL]) > 0 and reel_update(t, p) != 0:
+    h = int(p[H_NQT])
+    if int(p[H_NREEL]) > 0 and reel_update(t, y[2 * h : int(p[H_NSTATE])], p) != 0:
         return 1
     return rod_blocks(y, p, m1, blk)
 
