@@ -813,22 +813,11 @@ def main(argv=None) -> int:
 
     if "A" in args.parts or "C" in args.parts:
         run_part("A+C", part_free)
-    if "B" in args.parts:
-        run_part("B", lambda: (*part_birth(), None))
-    if "D" in args.parts:
-        run_part("D", part_retire)
-    if "E" in args.parts:
-        run_part("E", part_exponential)
-    if "F" in args.parts:
-        run_part("F", part_retrieval)
-    if "G" in args.parts:
-        run_part("G", part_convergence)
-    if "H" in args.parts:
-        run_part("H", part_hub)
-    if "I" in args.parts:
-        run_part("I", part_spool)
-    if "J" in args.parts:
-        run_part("J", part_seds)
+    for name, part in (("B", lambda: (*part_birth(), None)), ("D", part_retire), ("E", part_exponential),
+                       ("F", part_retrieval), ("G", part_convergence), ("H", part_hub), ("I", part_spool),
+                       ("J", part_seds)):  # fmt: skip
+        if name in args.parts:
+            run_part(name, part)
     free = found.get("A+C")
     if free is not None:
         # the L/N control's weakest failure over A, C and D (measured / bound): the gate reads
