@@ -99,14 +99,14 @@ def _derived_jacobian(y, f):
     ax = np.linalg.solve(kkt, np.vstack([-K, -E]))[: 3 * n]
     av = np.linalg.solve(kkt, np.vstack([np.zeros((3 * n, 3 * n)), -Fv]))[: 3 * n]
     Ti = np.linalg.inv(T)
-    return Ti @ ax @ T, Ti @ av @ T, resid
+    return Ti @ ax @ T, Ti @ av @ T, resid, (T, M, Gm, K, E, Fv)
 
 
 def test_derived_jacobian_matches_central_differences_of_the_rhs():
     model, y = _state(3)
     m1 = y.size // 2
     f0 = cowell_rhs_py(model, y)
-    aq, av, resid = _derived_jacobian(y, f0)
+    aq, av, resid, _ = _derived_jacobian(y, f0)
     # the constant-mass form reproduces the rhs's accelerations: round-off of sums of ~10 N forces
     assert resid < 1e-11
     jq = np.empty((3 * N_RODS, 3 * N_RODS))
@@ -127,3 +127,26 @@ def test_derived_jacobian_matches_central_differences_of_the_rhs():
     assert np.max(np.abs(jv - av)) <= 1e-5 * np.max(np.abs(jv))
     # the stiffness of the multipliers is what the Newton matrix is for: it is no small part here
     assert np.max(np.abs(aq)) > 10.0
+
+
+def test_bordered_newton_system_solves_radau5s_systems():
+    """(J3) of docs/inextensible.md 8, the system the O(n) factorisation is to solve, assembled
+    densely in joint coordinates: its solution is (g I - J)^-1 b with J = [[0, I], [A_q, A_v]] of
+    (J2), for a real and a complex shift of RADAU5's sizes (g ~ 1/h, h = 0.1 s)."""
+    model, y = _state(5)
+    m1 = y.size // 2
+    aq, av, _, (T, M, Gm, K, E, Fv) = _derived_jacobian(y, cowell_rhs_py(model, y))
+    nq = 3 * N_RODS
+    jac = np.block([[np.zeros((nq, nq)), np.eye(nq)], [aq, av]])
+    rng = np.random.default_rng(11)
+    for g in (36.0, 27.0 + 16.0j):
+        b = rng.normal(size=2 * nq) + (1j * rng.normal(size=2 * nq) if isinstance(g, complex) else 0.0)
+        z = np.linalg.solve(g * np.eye(2 * nq) - jac, b)
+        bq, bv = T @ b[:nq], T @ b[nq:]
+        lhs = np.block([[g * M + K / g, Gm.T], [g * Gm + E / g + Fv, np.zeros((N_RODS, N_RODS))]])
+        w = np.linalg.solve(lhs, np.concatenate([M @ bv - K @ bq / g, Gm @ bv - E @ bq / g]))[:nq]
+        zv = np.linalg.solve(T, w)
+        zq = (b[:nq] + zv) / g
+        # two dense solves of matrices of condition ~6e2 (measured 593 and 605): round-off ~1e-13 of |z|
+        assert np.max(np.abs(zv - z[nq:])) <= 1e-10 * np.max(np.abs(z))
+        assert np.max(np.abs(zq - z[:nq])) <= 1e-10 * np.max(np.abs(z))
