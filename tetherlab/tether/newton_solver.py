@@ -28,6 +28,7 @@ from ..integrators.linear_solver import (
 )
 from ..kernel.layout import H_LEN, H_NRIGID, H_NRODS, H_NROOT
 from . import newton as _nw
+from . import newton_inextensible as _ni
 
 #: "auto" takes the structured Newton matrix from this many rods on
 AUTO_STRUCTURED_MIN_RODS = 4
@@ -79,6 +80,49 @@ def _solve_complex(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
 KERNELS = (_form, _factor_real, _factor_complex, _solve_real, _solve_complex)
 
 
+# the inextensible chain's (docs/inextensible.md section 8): the same signatures, its own arrays
+@cfunc(FORM_SIG, cache=True)
+def _form_inext(t, y_ptr, p_ptr, m1, blk_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    return _ni.form_blocks(t, carray(y_ptr, (2 * m1,)), p, m1, carray(blk_ptr, (int(p[H_NRODS]), _ni.BLK_SIZE)))
+
+
+@cfunc(FACTOR_REAL_SIG, cache=True)
+def _factor_real_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    nrods = int(p[H_NRODS])
+    return _ni.factor(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), g_re, carray(fac_ptr, (nrods, _ni.FAC_SIZE)))
+
+
+@cfunc(FACTOR_COMPLEX_SIG, cache=True)
+def _factor_complex_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    nrods = int(p[H_NRODS])
+    return _ni.factor(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), complex(g_re, g_im),
+                      carray(fac_ptr, (nrods, _ni.FAC_SIZE)))  # fmt: skip
+
+
+@cfunc(SOLVE_REAL_SIG, cache=True)
+def _solve_real_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    nrods = int(p[H_NRODS])
+    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), g_re, carray(fac_ptr, (nrods, _ni.FAC_SIZE)), m1,
+              carray(b_ptr, (2 * m1,)))  # fmt: skip
+    return 0
+
+
+@cfunc(SOLVE_COMPLEX_SIG, cache=True)
+def _solve_complex_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
+    p = carray(p_ptr, (int(p_ptr[H_LEN]),))
+    nrods = int(p[H_NRODS])
+    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), complex(g_re, g_im), carray(fac_ptr, (nrods, _ni.FAC_SIZE)),
+              m1, carray(b_ptr, (2 * m1,)))  # fmt: skip
+    return 0
+
+
+KERNELS_INEXTENSIBLE = (_form_inext, _factor_real_inext, _factor_complex_inext, _solve_real_inext, _solve_complex_inext)
+
+
 def choose(p, n_state, second_order, request="auto") -> NewtonSolver:
     """The Newton matrix for RADAU5 on a tether model with parameter block ``p`` and a state of
     ``n_state`` components (``second_order`` as for :func:`tetherlab.integrators.integrate`).
@@ -92,6 +136,13 @@ def choose(p, n_state, second_order, request="auto") -> NewtonSolver:
         raise ValueError(f"newton: expected 'auto', 'dense' or 'structured'; got {request!r}")
     if request == "dense":
         return dense("requested")
+    if _ni.has_inextensible(p):
+        why = _ni.structure_supported(p, n_state, second_order)
+        if not why:
+            return NewtonSolver("structured", KERNELS_INEXTENSIBLE, functools.partial(_ni.workspace, p.copy()))
+        if request == "structured":
+            raise ValueError(f"newton: 'structured' is not available for this inextensible chain: {why}")
+        return dense(f"inextensible chain: {why}")
     why = _nw.structure_supported(p, n_state, second_order)
     if not why and request == "auto" and int(p[H_NRIGID]) > 0 and int(p[H_NRODS]) < AUTO_BORDERED_MIN_RODS:
         # The bordered matrix (rigid bodies, docs/integrators.md section 13) pays for its ~4 rhs
