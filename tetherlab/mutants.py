@@ -343,6 +343,16 @@ MUTANTS = {
             path="inextensible",
         ),
         Mutant(
+            "inextensible_centripetal_dropped",
+            "the inextensible rods' constraint at the acceleration level without its |d'|^2 term: "
+            "u.d'' = -(2 a d.d' + a^2 phi)/|d| in place of -(|d'|^2 + 2 a d.d' + a^2 phi)/|d|",
+            "tether/inextensible.py _constrain (p[H_MUTANT] = DEFECT_INEXT_NO_VSQ)",
+            "docs/inextensible.md 1 (C2: phi'' = d.d'' + |d'|^2) and 4 (B)",
+            ("inextensible_drift", "inextensible_libration"),
+            mutate=_flag(L.DEFECT_INEXT_NO_VSQ),
+            path="inextensible",
+        ),
+        Mutant(
             "reel_hub_exit_torque_dropped",
             "a reel on a rigid body without the moment e x rho L'^2 (1 + eps) u of the exit's momentum flux",
             "tether/reel_hub.py (p[H_MUTANT] = DEFECT_REEL_NO_EXIT_TORQUE)",

@@ -118,10 +118,6 @@ TOOTHLESS = {
     "kernel reaches; it is exact by construction (docs/deployment.md 6.1) and measured without integration",
     "inextensible_bessel_order": "not probed (24 runs up to 64 rods); its rod-count order is a property of the bars "
     "the model reduces to, which inextensible_rigid_chain measures exactly",
-    "inextensible_rigid_chain": "no registered defect reaches it: the defects of the force kernel act on the elastic "
-    "rod's strain, damping and printed coefficients or on the reel, which the inextensible rod replaces by its "
-    "constraint's multiplier. A gap, not a property: a defect of the constraint (e.g. the |D'|^2 term of "
-    "D.D'' + |D'|^2 = 0 dropped) is its missing control",
     "inextensible_drift_control": "a control itself: the stabilisation switched off must drift beyond the bound",
     "inextensible_energy": "not probed: the drift gate catches the unstabilised constraint, and a defect of the "
     "distributed forces keeps them conservative",
