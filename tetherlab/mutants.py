@@ -338,8 +338,18 @@ MUTANTS = {
             "the inextensible rods' length constraints held at the acceleration level only (Baumgarte rate 0)",
             "the rod records' constraint_rate_1_s (RT_CRATE), as build_model and prepare write them",
             "docs/inextensible.md 4 (the drift of an unstabilised index-reduced constraint grows with time)",
-            ("inextensible_drift",),
+            ("inextensible_drift", "inextensible_drift_orbit"),
             mutate=_unstabilised,
+            path="inextensible",
+        ),
+        Mutant(
+            "inextensible_centripetal_dropped",
+            "the inextensible rods' constraint at the acceleration level without its |d'|^2 term: "
+            "u.d'' = -(2 a d.d' + a^2 phi)/|d| in place of -(|d'|^2 + 2 a d.d' + a^2 phi)/|d|",
+            "tether/inextensible.py _constrain (p[H_MUTANT] = DEFECT_INEXT_NO_VSQ)",
+            "docs/inextensible.md 1 (C2: phi'' = d.d'' + |d'|^2) and 4 (B)",
+            ("inextensible_rigid_chain", "inextensible_drift", "inextensible_drift_orbit", "inextensible_libration"),
+            mutate=_flag(L.DEFECT_INEXT_NO_VSQ),
             path="inextensible",
         ),
         Mutant(

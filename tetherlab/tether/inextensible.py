@@ -29,6 +29,8 @@ from __future__ import annotations
 
 from .._jit import njit
 from ..kernel.layout import (
+    DEFECT_INEXT_NO_VSQ,
+    H_MUTANT,
     H_NRODS,
     H_OFF_ROD,
     H_OFF_SCR,
@@ -76,7 +78,10 @@ def _constrain(q, qd, p, g):
     dn = dx * ux + dy * uy + dz * uz  # |d|
     phi = 0.5 * (dn - hh) * (dn + hh)  # (|d|^2 - h^2) / 2, without the cancellation of dn^2 - hh^2
     phid = dx * vx + dy * vy + dz * vz
-    kappa = (vx * vx + vy * vy + vz * vz + 2.0 * a * phid + a * a * phi) / dn
+    vv = vx * vx + vy * vy + vz * vz  # |d'|^2: the centripetal part of (C2)
+    if int(p[H_MUTANT]) == DEFECT_INEXT_NO_VSQ:  # 0 in every user run (tetherlab/mutants.py)
+        vv = 0.0
+    kappa = (vv + 2.0 * a * phid + a * a * phi) / dn
     qx = p[sb + SR_Q]
     qy = p[sb + SR_Q + 1]
     qz = p[sb + SR_Q + 2]

@@ -118,11 +118,9 @@ TOOTHLESS = {
     "kernel reaches; it is exact by construction (docs/deployment.md 6.1) and measured without integration",
     "inextensible_bessel_order": "not probed (24 runs up to 64 rods); its rod-count order is a property of the bars "
     "the model reduces to, which inextensible_rigid_chain measures exactly",
-    "inextensible_rigid_chain": "no registered defect reaches it: the defects of the force kernel act on the elastic "
-    "rod's strain, damping and printed coefficients or on the reel, which the inextensible rod replaces by its "
-    "constraint's multiplier. A gap, not a property: a defect of the constraint (e.g. the |D'|^2 term of "
-    "D.D'' + |D'|^2 = 0 dropped) is its missing control",
     "inextensible_drift_control": "a control itself: the stabilisation switched off must drift beyond the bound",
+    "inextensible_drift_orbit_control": "a control itself: the 35-day run with the stabilisation switched off must "
+    "drift beyond the bound",
     "inextensible_energy": "not probed: the drift gate catches the unstabilised constraint, and a defect of the "
     "distributed forces keeps them conservative",
     "inextensible_ea_slope": "not probed (8 elastic RADAU5 runs): the slope measures the elastic model's limit, "
@@ -185,7 +183,7 @@ _PROBE_GATES = {
     "lateral": ["lateral_mode_two_rods"],
     "catenary": ["catenary_shape_n64", "catenary_tension_n64", "catenary_order_deviation"],
     "hanging_chain": ["hanging_chain_lateral_modes"],
-    "inextensible": ["inextensible_rigid_chain", "inextensible_drift", "inextensible_libration"],
+    "inextensible": ["inextensible_rigid_chain", "inextensible_drift", "inextensible_drift_orbit", "inextensible_libration"],
     "heyoka_orbits": ["heyoka_orbits_position"],
     "stiefel": ["stiefel_cowell_best_error", "stiefel_dromo_best_error", "stiefel_example1_te_error"],
     "de421": ["de421_fit_error"],

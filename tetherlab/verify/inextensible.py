@@ -176,6 +176,30 @@ def long_run_scene(rate=None):
 #: drift bound: a rod's length error, relative (docs/inextensible.md 6.3)
 DRIFT_BOUND = 1e-9
 
+MU_EARTH = 3.986004418e14  # m^3/s^2, the libration scene's central body (EGM2008 / WGS 84 GM)
+ORBIT_R0_M = 7.4e6  # studies/scenes/libration-inplane.toml: circular orbit of the centre of mass
+
+
+def orbit_drift_scene(rate=None, days: float = 35.0):
+    """The long orbital run of the drift gate: the in-plane libration scene (5 km, 10 kg between
+    1000 kg and 100 kg at 7400 km), 4 inextensible rods, 30 deg, DOP853 rtol 1e-10, 3501 outputs."""
+    from ..scene import load_scene
+
+    ch = {"tethers.main.rods": 4, "tethers.main.model": "inextensible", "duration": f"{days!r} d", "output.count": 3501}
+    if rate is not None:
+        ch["tethers.main.constraint_rate"] = f"{rate!r} 1/s"
+    return load_scene(SCENES / "libration-inplane.toml").replace(**ch)
+
+
+def orbit_drift_bound(run: dict) -> float:
+    """Baumgarte's critically damped constraint forgets a violation in about 1/a; over that time
+    the integrator adds one local error per step, each below rtol (relative): the length error
+    stays below 2 rtol x (steps per 1/a), a = the default rate, the mean motion (docs/inextensible.md
+    6.3).  The rate is the scene's default, not the run's, so a run with the rate zeroed is held to
+    the same bound."""
+    a = math.sqrt(MU_EARTH / ORBIT_R0_M**3)
+    return 2.0 * run["rtol"] * run["steps"] / (a * run["t_end_s"])
+
 
 def check_inextensible(rows_out, quick: bool = False):
     """The gates of the inextensible model (references/gates.toml, inextensible_*)."""
@@ -189,6 +213,8 @@ def check_inextensible(rows_out, quick: bool = False):
     gates = {"inextensible_rigid_chain": worst}
     if quick:
         gates["inextensible_drift"] = drift_run(long_run_scene())["drift_length"]
+        orb = drift_run(orbit_drift_scene())
+        gates["inextensible_drift_orbit"] = orb["drift_length"] / orbit_drift_bound(orb)
         gates["inextensible_libration"] = max(abs(e) for e in libration_errors(ns=(1, 2)).values())
         return gates
     order_ns = (8, 16, 32, 64)
@@ -210,6 +236,13 @@ def check_inextensible(rows_out, quick: bool = False):
     gates["inextensible_drift"] = on["drift_length"]
     gates["inextensible_drift_control"] = DRIFT_BOUND / off["drift_length"]
     gates["inextensible_energy"] = on["energy"] / (math.sqrt(on["steps"]) * on["rtol"])
+    orb_on = drift_run(orbit_drift_scene())
+    orb_off = drift_run(orbit_drift_scene(rate=0.0))
+    for name, r in (("stabilised", orb_on), ("stabilisation off (control)", orb_off)):
+        rows_out.append({"case": f"35 d on orbit, 4 rods, {name}: max | |D| - l | / l (bound {orbit_drift_bound(r):.3g})",
+                         "value": r["drift_length"]})  # fmt: skip
+    gates["inextensible_drift_orbit"] = orb_on["drift_length"] / orbit_drift_bound(orb_on)
+    gates["inextensible_drift_orbit_control"] = orbit_drift_bound(orb_off) / orb_off["drift_length"]
     slope, diffs = ea_convergence()
     rows_out.append({"case": f"elastic against inextensible, EA = 1e5 ... 1e8: {np.array2string(diffs, precision=3)}",
                      "value": slope})  # fmt: skip

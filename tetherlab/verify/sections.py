@@ -61,7 +61,7 @@ _GATES_OF = {
     "lateral": ("lateral_mode_two_rods",),
     "hanging-chain": ("hanging_chain_lateral_modes",),
     "inextensible": ("inextensible_rigid_chain", "inextensible_bessel_order", "inextensible_drift",
-                     "inextensible_drift_control", "inextensible_energy", "inextensible_ea_slope",
+                     "inextensible_drift_control", "inextensible_drift_orbit", "inextensible_drift_orbit_control", "inextensible_energy", "inextensible_ea_slope",
                      "inextensible_libration"),
     "gravity": ("heyoka_orbits_position",),
     "de421": ("de421_fit_error",),
