@@ -29,10 +29,28 @@ def static_start(scene, root, tethers, specs, effects, central, nq, y0):
     release = t.initial.release
     if release is not None:
         return _released(held, specs[0], r0, tip_r, release, f"tethers.{t.name}.initial.release")
+    where = f"bodies.{t.to_body}.position"
+    reach = float(np.linalg.norm(np.asarray(tip_r, float) - r0))
+    if specs[0].model == "inextensible" and reach > specs[0].length_m:
+        # rods that keep their length cannot span more than the tether's length
+        raise SceneError(where, f"an end mass within the inextensible tether's length {specs[0].length_m:g} m of its root",
+                         f"{reach:.9g} m from the root")  # fmt: skip
     try:
         eq = solve(held, r0, tip_r, down=down)
     except ValueError as exc:
+        if specs[0].tension_only:  # the placement, not the solver, is what the user can change
+            raise SceneError(where, "an end mass placed where the tension-only tether hangs with every rod taut",
+                             f"{reach:.9g} m from the root, where no static equilibrium was found ({exc}); "
+                             "move the end mass off the vertical or closer to the root") from None  # fmt: skip
         raise SceneError(path, "a tether with a static equilibrium between its placed ends", str(exc)) from None
+    if specs[0].tension_only and specs[0].rods > 1 and float(eq.strain.min()) <= 0.0:
+        # the only equilibrium found has slack rods: a tether that cannot push does not hold that
+        # shape (the line stretched by its own weight is longer than the span and has nowhere to
+        # hang: a hold on, or too near, the vertical below the root at the tether's length)
+        k = int(np.argmin(eq.strain))
+        raise SceneError(where, "an end mass placed where the tension-only tether hangs with every rod taut",
+                         f"{reach:.9g} m from the root: the equilibrium found has rod {k + 1} of {specs[0].rods} "
+                         f"slack (strain {float(eq.strain[k]):.3g}); move the end mass off the vertical or closer to the root")  # fmt: skip
     return eq.y, eq.holding_force_N
 
 
