@@ -8,6 +8,10 @@ rods of 500 m costs at most 2x the fixed run; the cost per birth (the phase's se
 built, the state remapped, the integrator restarted) is the difference divided by the births; the
 last row fits the wall time's exponent in the final rod count (target ~1: linear in rods).
 RADAU5 with the structured Newton matrix, rtol 1e-8; wall times, the kernels already compiled.
+Next to each wall time the counts that do not depend on the machine's load: accepted steps and
+rejections (summed over the phases). The rows with ``error_scale = "tether"``
+(docs/integrators.md 15) measure the same runs with the rods' tolerances floored at the whole
+line's (docs/deployment.md 8b says what that does to the answer).
 """
 
 from __future__ import annotations
@@ -20,7 +24,7 @@ ROD_LENGTHS_M = (2000.0, 1000.0, 500.0)
 L0_M, L1_M = 500.0, 20000.0
 
 
-def _scene(rod_m: float, reel: bool):
+def _scene(rod_m: float, reel: bool, error_scale: str = "rod"):
     from ..scene import Scene
 
     import math
@@ -39,7 +43,7 @@ def _scene(rod_m: float, reel: bool):
         "orbit": {"reference": "center_of_mass", "motion": "corotating",
                   "elements": {"a": "7000 km", "e": 0.0, "i": "0 deg", "raan": "0 deg", "argp": "0 deg", "nu": "0 deg"}},
         "tethers": {"main": tether},
-        "integrator": {"method": "radau5", "rtol": 1e-8, "atol": 1e-8},
+        "integrator": {"method": "radau5", "rtol": 1e-8, "atol": 1e-8, "error_scale": error_scale},
         "output": {"count": 101},
     })  # fmt: skip
 
@@ -52,21 +56,32 @@ def _wall(scene) -> tuple[float, object]:
     return time.perf_counter() - t0, res
 
 
-def bench_rows(rod_lengths=ROD_LENGTHS_M) -> list[dict]:
+def _counts(res) -> tuple[int, int]:
+    """(accepted steps, rejections) of a run: a deployment's summed over its phases."""
+    stats = [ph.stats for ph in res.phases] if hasattr(res, "phases") else [res.stats]
+    return sum(int(s["n_accepted"]) for s in stats), sum(int(s["n_rejected"]) for s in stats)
+
+
+def bench_rows(rod_lengths=ROD_LENGTHS_M, error_scales=("rod", "tether")) -> list[dict]:
     _wall(_scene(rod_lengths[0], True))  # warm-up: compilation excluded
     rows = []
-    walls, rods = [], []
-    for rod_m in rod_lengths:
-        w_reel, dep = _wall(_scene(rod_m, True))
-        w_fixed, _ = _wall(_scene(rod_m, False))
-        births = sum(1 for c in dep.changes if c["change"] == "birth")
-        n_final = int(dep.reel["rods"].iloc[-1])
-        rows.append({"rod_m": rod_m, "births": births, "final_rods": n_final, "deploy_s": w_reel,
-                     "fixed_s": w_fixed, "ratio": w_reel / w_fixed,
-                     "per_birth_ms": 1e3 * (w_reel - w_fixed) / births if births else float("nan")})  # fmt: skip
-        walls.append(w_reel)
-        rods.append(n_final)
-    fit = float(np.polyfit(np.log(rods), np.log(walls), 1)[0])
-    rows.append({"rod_m": "fitted exponent", "births": "", "final_rods": "", "deploy_s": fit, "fixed_s": "",
-                 "ratio": "", "per_birth_ms": ""})
+    for scale in error_scales:
+        walls, rods = [], []
+        for rod_m in rod_lengths:
+            w_reel, dep = _wall(_scene(rod_m, True, scale))
+            w_fixed, fixed = _wall(_scene(rod_m, False, scale))
+            births = sum(1 for c in dep.changes if c["change"] == "birth")
+            n_final = int(dep.reel["rods"].iloc[-1])
+            (s_dep, r_dep), (s_fix, r_fix) = _counts(dep), _counts(fixed)
+            rows.append({"error_scale": scale, "rod_m": rod_m, "births": births, "final_rods": n_final,
+                         "deploy_s": w_reel, "fixed_s": w_fixed, "ratio": w_reel / w_fixed,
+                         "per_birth_ms": 1e3 * (w_reel - w_fixed) / births if births else float("nan"),
+                         "deploy_steps": s_dep, "deploy_rejected": r_dep, "fixed_steps": s_fix,
+                         "fixed_rejected": r_fix, "step_ratio": s_dep / s_fix})  # fmt: skip
+            walls.append(w_reel)
+            rods.append(n_final)
+        fit = float(np.polyfit(np.log(rods), np.log(walls), 1)[0])
+        rows.append({"error_scale": scale, "rod_m": "fitted exponent", "births": "", "final_rods": "",
+                     "deploy_s": fit, "fixed_s": "", "ratio": "", "per_birth_ms": "", "deploy_steps": "",
+                     "deploy_rejected": "", "fixed_steps": "", "fixed_rejected": "", "step_ratio": ""})  # fmt: skip
     return rows
