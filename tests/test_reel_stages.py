@@ -6,7 +6,7 @@ with and without it (docs/deployment.md 14).
 * the staged command is the law's formula with the stage's l_c at every output (the switch ends a
   phase and writes l_c for the next one);
 * the constant-speed retrieval's in-plane angle against the rigid-rod variable-length pendulum
-  (tetherlab/oracles/reeled_pendulum.py), slow.
+  (tetherlab/oracles/reeled_pendulum.py).
 """
 
 from __future__ import annotations
@@ -108,15 +108,14 @@ def test_staged_retrieval_reaches_the_last_stage(staged):
     assert np.abs(pr["theta"]).max() < math.radians(20.0)
 
 
-@pytest.mark.slow
 def test_uniform_retrieval_against_the_rigid_rod_pendulum():
     """The constant-speed retrieval (1 m/s, 5 km -> 100 m) against theta'' = -(I'/I)(theta' + Omega)
-    - 3 Omega^2 sin theta cos theta, I = (m* + rho l/3) l^2, while l >= 500 m (below, the angle
-    passes 100 deg and the line slackens: outside both models).  Budget, relative to the largest
+    - 3 Omega^2 sin theta cos theta, I = (m* + rho l/3) l^2, while l >= 500 m (the angle reaches
+    87 deg there; below, it passes 100 deg and the line swings through: outside both models).  Budget, relative to the largest
     angle: the line's flexibility, of the order of its mass ratio rho l/m* (0.010 at 5 km; the
     rigid-rod term takes its mean effect), the field beyond the gravity gradient 4 l/a (0.003,
     docs/deployment.md 7), the strain eps (2e-4).  A stated estimate, not a derived bound.
-    Measured: 0.5 deg against 1.4 deg."""
+    Measured: 0.44 deg against 1.15 deg (2 s once compiled)."""
     c = _STUDY.RETRIEVAL
     run = simulate_reel(_STUDY.retrieval_scene(), progress=False)
     pr = _STUDY.profile(run)
@@ -127,4 +126,4 @@ def test_uniform_retrieval_against_the_rigid_rod_pendulum():
     budget = (c["rho"] * c["L0"] / _STUDY.reduced_mass() + 4.0 * c["L0"] / c["a"] + eps) * float(np.abs(oracle).max())
     err = float(np.abs(theta - oracle).max())
     assert err <= budget, (math.degrees(err), math.degrees(budget))
-    assert np.abs(oracle).max() > math.radians(90.0)  # the instability is in the window
+    assert np.abs(oracle).max() > math.radians(80.0)  # the instability is in the window (87 deg at 500 m)
