@@ -142,3 +142,18 @@ def _pendulum_error(run):
     eps = float(np.abs(pr["T"][keep]).max()) / c["EA"]
     budget = (c["rho"] * c["L0"] / _STUDY.reduced_mass() + 4.0 * c["L0"] / c["a"] + eps) * float(np.abs(oracle).max())
     return float(np.abs(theta - oracle).max()), budget, oracle
+
+
+@pytest.mark.slow
+def test_yes2_like_runs_both_stages():
+    """The YES2-like scene (studies/reel_yes2.py, ~9 s): the first stage holds below the line's
+    end, the second starts at its scheduled time and pays the rest of the 31.7 km line out; the
+    run stops with the located event reel.main.spent and keeps its outputs (docs/deployment.md 15)."""
+    yes2 = import_study("reel_yes2")
+    run = simulate_reel(yes2.yes2_scene(), progress=False, raise_on_failure=False)
+    assert run.stopped_by == "reel.main.spent", run.message
+    pr = yes2.yes2_profile(run)
+    start2 = yes2.yes2_scene(count=3).tethers[0].reel.spool.stages[0][0]
+    first = pr["t"] < start2
+    assert pr["L"][first].max() < 10e3  # the first stage never runs away towards the line's end
+    assert pr["t"][-1] > start2 and abs(pr["L"][-1] - yes2.YES2["line"]) < 1.0
