@@ -48,6 +48,12 @@ I. The reel as a dynamical system (studies/reel_laws.py, docs/deployment.md 10-1
 J. A SEDS-like deployment (studies/reel_laws.py seds_scene): 20 km from a canister through a
    passive friction brake to a 25 kg end mass from 400 km, run to the end of the line; no gate
    (no published profile is reproduced), the swing angle and tension profile as figures.
+K. A YES2-like two-stage deployment (studies/reel_yes2.py): the tension law in stages, l_c = 3.4 km
+   then 30 km (docs/deployment.md 10.6, 15); no gate yet; length, rate, tension, in-plane angle and
+   the commanded length in a figure.
+L. Retrieval of 5 km to 100 m (studies/reel_retrieval.py, docs/deployment.md 14): at constant speed
+   (the growing libration) and under the tension law in stages (held); no gate here (the
+   comparison with the rigid-rod pendulum and its control are tests: tests/test_reel_stages.py).
 
     PYTHONPATH=. python studies/deployment.py OUTDIR [--quiet]
 """
@@ -489,6 +495,93 @@ def part_seds():
     return rows, {}, prof
 
 
+def part_yes2():
+    """K: the YES2-like two-stage deployment (no gate)."""
+    from studies import reel_yes2 as Y
+
+    run = simulate_reel(Y.yes2_scene(), progress=False, raise_on_failure=False)
+    if not run.ok:
+        raise RuntimeError(f"part K: the YES2-like run failed: {run.message}")
+    prof = Y.yes2_profile(run)
+    births = sum(c["change"] == "birth" for c in run.changes)
+    rows = [{"case": "K YES2-like: end of the run", "value": float(prof["t"][-1] / 60.0), "unit": "min",
+             "note": f"{prof['L'][-1] / 1e3:.1f} km out ({run.stopped_by or 'end of run'}), speed {prof['v'][-1]:.1f} m/s, "
+                     f"angle {math.degrees(prof['theta'][-1]):.1f} deg; {births} births; no gate"}]  # fmt: skip
+    return rows, {}, prof
+
+
+def part_retrieval_law():
+    """L: retrieval 5 km -> 100 m, at constant speed and under the staged tension law (no gate)."""
+    from studies import reel_retrieval as R
+
+    out = {}
+    for name, controlled in (("constant", False), ("tension", True)):
+        run = simulate_reel(R.retrieval_scene(controlled=controlled), progress=False, raise_on_failure=False)
+        if not run.ok:
+            raise RuntimeError(f"part L: the {name} retrieval failed: {run.message}")
+        out[name] = R.profile(run)
+    out["oracle"] = R.oracle_angle(out["constant"]["t"])
+    rows = [{"case": f"L retrieval 5 km -> 100 m, {name}: max |angle|", "value": math.degrees(float(abs(pr["theta"]).max())),
+             "unit": "deg", "note": f"L {pr['L'][-1]:.0f} m at {pr['t'][-1] / 60:.0f} min; no gate"}
+            for name, pr in (("constant speed 1 m/s", out["constant"]), ("tension law in stages", out["tension"]))]  # fmt: skip
+    return rows, {}, out
+
+
+def scene_figures(out: Path, yes2: dict | None, retr: dict | None) -> list[str]:
+    """K: the YES2-like run's length, commanded length, rate, tension and angle; L: the two
+    retrievals' angle and length, the rigid-rod pendulum beside the constant-speed one."""
+    if yes2 is None and retr is None:
+        return []
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = []
+    if yes2 is not None:
+        fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+        tm = yes2["t"] / 60.0
+        axes[0].plot(tm, yes2["L"] / 1e3, "C0-", label="deployed length")
+        axes[0].plot(tm, np.asarray(yes2["lc"]) / 1e3, "k--", lw=1, label="commanded length (stages)")
+        axes[0].set_xlabel("t (min)")
+        axes[0].set_ylabel("km")
+        axes[0].legend(fontsize=8)
+        axes[0].set_title("K: YES2-like, two stages")
+        axes[1].plot(tm, yes2["v"], "C3-", label="rate L' (m/s)")
+        axes[1].plot(tm, yes2["T"], "C2-", label="exit tension (N)")
+        axes[1].set_xlabel("t (min)")
+        axes[1].legend(fontsize=8)
+        axes[2].plot(tm, np.degrees(yes2["theta"]), "C1-")
+        axes[2].set_xlabel("t (min)")
+        axes[2].set_ylabel("in-plane angle (deg)")
+        fig.tight_layout()
+        fig.savefig(out / "deployment_yes2.png", dpi=110)
+        plt.close(fig)
+        names.append("deployment_yes2.png")
+    if retr is not None:
+        fig, axes = plt.subplots(1, 2, figsize=(13, 4.2))
+        c, k = retr["constant"], retr["tension"]
+        axes[0].plot(c["t"] / 60.0, np.degrees(c["theta"]), "C3-", label="constant speed 1 m/s")
+        axes[0].plot(c["t"] / 60.0, np.degrees(retr["oracle"]), "k:", label="rigid-rod pendulum (scipy)")
+        axes[0].plot(k["t"] / 60.0, np.degrees(k["theta"]), "C0-", label="tension law in stages")
+        axes[0].set_ylim(-190, 190)
+        axes[0].set_xlabel("t (min)")
+        axes[0].set_ylabel("in-plane angle (deg)")
+        axes[0].legend(fontsize=8)
+        axes[0].set_title("L: retrieval 5 km -> 100 m")
+        axes[1].plot(c["t"] / 60.0, c["L"], "C3-", label="constant speed")
+        axes[1].plot(k["t"] / 60.0, k["L"], "C0-", label="tension law in stages")
+        axes[1].set_yscale("log")
+        axes[1].set_xlabel("t (min)")
+        axes[1].set_ylabel("deployed length (m)")
+        axes[1].legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(out / "deployment_retrieval_law.png", dpi=110)
+        plt.close(fig)
+        names.append("deployment_retrieval_law.png")
+    return names
+
+
 def spool_figures(out: Path, spool: dict | None, seds: dict | None = None) -> list[str]:
     """The drum against its oracle and the tension law's perturbation decaying (part G); the
     SEDS-like swing angle and tension profile (part H)."""
@@ -788,7 +881,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir", type=Path)
     ap.add_argument("--quiet", action="store_true")
-    ap.add_argument("--parts", default="ABCDEFGHIJ", help="parts to run (A and C run together)")
+    ap.add_argument("--parts", default="ABCDEFGHIJKL", help="parts to run (A and C run together)")
     args = ap.parse_args(argv)
     out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
@@ -815,7 +908,7 @@ def main(argv=None) -> int:
         run_part("A+C", part_free)
     for name, part in (("B", lambda: (*part_birth(), None)), ("D", part_retire), ("E", part_exponential),
                        ("F", part_retrieval), ("G", part_convergence), ("H", part_hub), ("I", part_spool),
-                       ("J", part_seds)):  # fmt: skip
+                       ("J", part_seds), ("K", part_yes2), ("L", part_retrieval_law)):  # fmt: skip
         if name in args.parts:
             run_part(name, part)
     free = found.get("A+C")
@@ -826,6 +919,7 @@ def main(argv=None) -> int:
         gates["deployment_rescaled_negative_control"] = 1.0 / control if control > 0 else math.inf
     figs = figures(out, free, found.get("E"), found.get("F")) + spool_figures(out, found.get("I"), found.get("J"))
     figs += hub_figures(out, found.get("H"))
+    figs += scene_figures(out, found.get("K"), found.get("L"))
     summary = {"gates": gates, "failures": failures, "wall_s": walls}
     (out / "deployment_summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     write_report(out, rows, gates, figs, walls)

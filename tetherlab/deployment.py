@@ -60,6 +60,10 @@ def check_law(scene, duration_s: float) -> None:
         path = f"tethers.{t.name}.reel"
         line = t.length_m + r.stored_length_m
         if r.spool is not None:  # its length is state: the kernel stops a run that spends the line
+            for j, (start, _) in enumerate(r.spool.stages):
+                if not start < duration_s:
+                    raise SceneError(f"{path}.stages[{j}].start", f"a start within the run (before {duration_s:.6g} s)",
+                                     f"{start:.6g} s")  # fmt: skip
             continue
         if r.law == "table":
             if r.times_s[-1] < duration_s:
@@ -229,6 +233,29 @@ def _kernel_index(prep, name: str) -> int:
     return [x.name for x in prep.model.tethers].index(name)
 
 
+def stage_length(spool, t_s: float) -> float:
+    """The commanded length of a tension law at t_s: the last stage started at or before it (a
+    stage that starts at t_s holds from there: a phase starting at a stage's start runs under it)."""
+    lc = spool.commanded_length_m
+    for start, length in spool.stages:
+        if start <= t_s * (1.0 + 1e-12) + 1e-9:
+            lc = length
+    return lc
+
+
+def set_stage(prep, tethers, t_s: float) -> None:
+    """Write every staged tension law's commanded length at t_s into the model's parameters: the
+    command is constant over a phase, and a stage's start ends one (docs/deployment.md 10.6)."""
+    reels = p_view(prep.model.p).reels
+    for t in tethers:
+        if t.reel.spool is None or not t.reel.spool.stages:
+            continue
+        k = _kernel_index(prep, t.name)
+        for i in range(len(reels)):
+            if int(reels[i].tether) == k:
+                reels[i].lc_m = stage_length(t.reel.spool, t_s)
+
+
 def _deployed(tether, prep, y_end, t_s: float) -> float:
     """The deployed length of a reel tether at the end of a phase: its law's, or its state's."""
     if tether.reel.spool is not None:
@@ -383,7 +410,8 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
     check_law(scene, t_end)
     bar = _ProgressBar(t_end, enabled=progress) if not callable(progress) else None
     update = bar.update if bar is not None else progress
-    knots = sorted({float(x) for t in tethers if t.reel.law == "table" for x in t.reel.times_s[1:-1]})
+    knots = sorted({float(x) for t in tethers if t.reel.law == "table" for x in t.reel.times_s[1:-1]}
+                   | {float(s[0]) for t in tethers if t.reel.spool is not None for s in t.reel.spool.stages})
     loop = sink.resume or {"phase": 0, "t_a": 0.0, "y": prep0.y0, "rods": {t.name: t.rods for t in tethers},
                            "model_rods": None, "changes": []}  # fmt: skip
     # the model of the phase: the first one's, or rebuilt after the last birth or retirement
@@ -400,7 +428,8 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
                 tc, kind = next_change(t.reel, t.length_m, state[t.name], t_a, t_end)
                 if tc < nxt[0]:
                     nxt = (tc, kind, t)
-            # a table law's knots end a phase too, so that no step straddles the jump of L's third derivative
+            # a table law's knots end a phase too, so that no step straddles the jump of L's third derivative;
+            # so does a tension law's stage (its command jumps: docs/deployment.md 10.6)
             knot = min((k for k in knots if k > t_a * (1.0 + 1e-12) + 1e-9), default=math.inf)
             if knot < nxt[0] and knot < t_end:
                 nxt = (knot, "knot", None)
@@ -409,6 +438,7 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
             times = np.concatenate([[t_a], inside, [t_b]])
             prep = replace(prep, y0=y, t_out=times, t0_s=t_a)
             p_view(prep.model.p).defect = defect  # 0 in every user run
+            set_stage(prep, tethers, t_a)
             sink.start_phase(loop)
             res, p = sink.run_phase(loop, prep, prep.model.fresh_params(), update)
             stats, msg = run_outcome(prep, res, p, 0.0)

@@ -8,6 +8,8 @@ Rigid bodies (docs/rigid-oracles.md): ``torque_free`` (closed-form torque-free
 asymmetric body, Jacobi elliptic functions), ``gg_attitude`` (gravity-gradient libration
 frequencies and a nonlinear attitude integration), ``spinning_spokes`` (steady hub-and-spoke
 tethers in free space), ``wheel_exchange`` (momentum exchange with wheels).
+``reeled_pendulum``: the in-plane libration of a line of varying length as a rigid rod in the
+Hill frame (docs/deployment.md 14).
 None of them imports the TMED tether code (``tetherlab.tether``, ``tetherlab.system``,
 ``tetherlab.kernel.effects``).
 """

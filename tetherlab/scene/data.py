@@ -252,6 +252,9 @@ class SpoolLaw:
     min_tension_N: float = 0.0
     max_tension_N: float = 0.0
     limit_width_N: float = 0.0  # 0: no limits
+    # law 'tension': later stages (start time, commanded length), start strictly increasing and > 0;
+    # commanded_length_m holds from t = 0 to the first start (docs/deployment.md 10.6)
+    stages: tuple = ()
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,9 @@ from .keys import _choice, _number, _quantity, _required, _table, _vector
 #: the spool laws' keys (docs/deployment.md 10, docs/scenes.md)
 _SPOOL_KEYS = ("spool_inertia", "drum_radius", "torque", "viscous_friction", "coulomb_friction", "friction_speed")
 _TENSION_KEYS = ("reduced_mass", "orbit_rate", "commanded_length", "k1", "k2", "min_tension", "max_tension",
-                 "limit_width")
+                 "limit_width", "stages")
+#: the keys of one entry of a tension law's `stages` (docs/deployment.md 10.6)
+_STAGE_KEYS = ("start", "commanded_length")
 _REEL_KEYS = ("at", "exit", "law", "speed", "rate", "times", "lengths", "rod_length", "birth_length", "retire_length",
               "stored_length", "point", "exit_direction", "spool_radius", "spool_axis") + _SPOOL_KEYS + _TENSION_KEYS
 VISCOUS = Kind("N s / m", "a viscous friction coefficient (force per speed)", "20 N s/m")
@@ -178,7 +180,34 @@ def _spool_law(table, path: str, law: str, exit_: str, length_m: float) -> Spool
     elif "limit_width" in table:
         raise SceneError(f"{path}.limit_width", "a min_tension or max_tension for it to round", shown(table["limit_width"]))
     del length_m
-    return SpoolLaw(inertia, radius, 0.0, viscous, coulomb, vs, mstar, omega, lc, k1, k2, tmin, tmax, width)
+    stages = _stages(table, path) if "stages" in table else ()
+    return SpoolLaw(inertia, radius, 0.0, viscous, coulomb, vs, mstar, omega, lc, k1, k2, tmin, tmax, width, stages)
+
+
+def _stages(table, path: str) -> tuple:
+    """A tension law's later stages: ((start s, commanded length m), ...), the starts after 0 and
+    strictly increasing.  The scene's `commanded_length` holds until the first start; a stage's
+    length holds from its start to the next one's (docs/deployment.md 10.6)."""
+    raw = table["stages"]
+    key = f"{path}.stages"
+    example = "[{start = '2 h', commanded_length = '30 km'}]"
+    if not isinstance(raw, (list, tuple)) or not raw:
+        raise SceneError(key, f"a non-empty list of stages, each a table of start and commanded_length (e.g. {example})",
+                         shown(raw))  # fmt: skip
+    out = []
+    for j, st in enumerate(raw):
+        sk = f"{key}[{j}]"
+        st = _table(st, sk, _STAGE_KEYS)
+        start = _quantity(_required(st, "start", sk, f"{TIME.describe()} (when the stage's command takes over)"),
+                          f"{sk}.start", TIME)  # fmt: skip
+        lc = _quantity(_required(st, "commanded_length", sk, LENGTH.describe()), f"{sk}.commanded_length", LENGTH,
+                       positive=True)  # fmt: skip
+        before = out[-1][0] if out else 0.0
+        if not start > before:
+            raise SceneError(f"{sk}.start", f"a start after {'the previous stage' if out else 't = 0'} "
+                             f"({before:.6g} s): stages in order of time", f"{start:.6g} s")  # fmt: skip
+        out.append((start, lc))
+    return tuple(out)
 
 
 def _table_law(table, path: str, length_m: float) -> tuple[tuple, tuple]:

@@ -267,4 +267,6 @@ def _spool_dict(r) -> dict:
         if sp.max_tension_N > 0.0:
             out["max_tension"] = format_si(sp.max_tension_N, FORCE)
         out["limit_width"] = format_si(sp.limit_width_N, FORCE)
+    if sp.stages:
+        out["stages"] = [{"start": format_si(t, TIME), "commanded_length": format_si(lc, LENGTH)} for t, lc in sp.stages]
     return out

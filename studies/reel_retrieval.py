@@ -1,0 +1,106 @@
+"""Retrieval of a 5 km tether to 100 m, at constant speed and under the tension law
+(docs/deployment.md 14): the instability of uniform retrieval shown, then held.
+
+* the constant-speed retrieval's in-plane angle against the rigid-rod variable-length pendulum
+  of tetherlab/oracles/reeled_pendulum.py (gated; negative control: a kernel that ignores the law,
+  DEFECT_REEL_FROZEN);
+* the same line hauled in by the tension law (k1 = 4, k2 = 1) with its commanded length halved
+  every 0.75 orbit, 2.5 km -> 100 m (`stages`, docs/deployment.md 10.6): the libration stays
+  bounded and decays.  One step straight to l_c = 100 m is far outside the linear law's range
+  (k1 (L - l_c) is 50 l_c at the start) and tumbles the line (measured: the angle passes 170 deg).
+
+The tests (tests/test_reel_scenes.py) import these scenes and measures: one definition.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from tetherlab.deployment import simulate_reel
+from tetherlab.oracles.reeled_pendulum import libration
+from tetherlab.scene import Scene
+
+MU = 3.986004418e14  # m^3/s^2, the scene preset "earth" (tetherlab/scene/data.py)
+RETRIEVAL = dict(a=7000e3, M=1e4, m=100.0, rho=2e-4, L0=5000.0, Lf=100.0, v=1.0, EA=1e4, damping=3e4, rod=1000.0,
+                 retire=50.0, lc=100.0, k1=4.0, k2=1.0, J=1e-3, R=0.1)  # fmt: skip
+
+
+STAGE_ORBITS = 0.75  # the time between two halvings of the commanded length (the slow mode's e-fold is 0.85 orbit)
+
+
+def stage_lengths() -> list:
+    """The commanded lengths of the controlled retrieval: L0/2, L0/4, ... while above l_c, then l_c."""
+    c = RETRIEVAL
+    out, l = [], c["L0"]
+    while l / 2.0 > c["lc"]:
+        l /= 2.0
+        out.append(l)
+    return out + [c["lc"]]
+
+
+def omega() -> float:
+    return math.sqrt(MU / RETRIEVAL["a"] ** 3)
+
+
+def reduced_mass() -> float:
+    c = RETRIEVAL
+    return c["M"] * c["m"] / (c["M"] + c["m"])
+
+
+def retrieval_scene(*, controlled: bool = False, count: int = 401, orbits: float | None = None):
+    """A 10 t station on a 7000 km circular orbit hauls in a 100 kg subsatellite on 5 km of line
+    (0.2 g/m: 1 kg against m* = 99 kg; EA 10 kN, damping 30 kN s), rods of 1 km, along the local
+    vertical at rest in the orbiting frame at the static strain.  Uncontrolled: the law `constant`
+    at -1 m/s to 100 m (4900 s).  Controlled: the tension law about l_c = 100 m from a drum
+    (J/R^2 = 0.1 kg), from rest."""
+    c = RETRIEVAL
+    om = omega()
+    mred = reduced_mass()
+    strain = 3.0 * mred * om**2 * c["L0"] / c["EA"]
+    if controlled:
+        lcs = stage_lengths()
+        period = 2.0 * math.pi / om
+        reel = {"law": "tension", "exit": "drum", "spool_inertia": f"{c['J']} kg m2", "drum_radius": f"{c['R']} m",
+                "reduced_mass": f"{mred!r} kg", "orbit_rate": f"{om!r} rad/s", "commanded_length": f"{lcs[0]!r} m",
+                "k1": c["k1"], "k2": c["k2"],
+                "stages": [{"start": f"{(j + 1) * STAGE_ORBITS * period!r} s", "commanded_length": f"{x!r} m"}
+                           for j, x in enumerate(lcs[1:])]}  # fmt: skip
+        duration = f"{orbits if orbits is not None else 5.0} orbits"
+    else:
+        reel = {"law": "constant", "speed": f"{-c['v']} m/s"}
+        duration = f"{(c['L0'] - c['Lf']) / c['v']!r} s"
+    reel.update({"rod_length": f"{c['rod']} m", "retire_length": f"{c['retire']} m", "stored_length": "1 km"})
+    return Scene.from_dict({
+        "name": "retrieval-" + ("tension" if controlled else "constant"), "duration": duration,
+        "effects": {"central_gravity": {}},
+        "bodies": {"m0": {"mass": f"{c['M']} kg"}, "mf": {"mass": f"{c['m']} kg"}},
+        "orbit": {"reference": "center_of_mass", "motion": "corotating", "elements": {
+            "a": f"{c['a'] / 1e3} km", "e": 0.0, "i": "0 deg", "raan": "0 deg", "argp": "0 deg", "nu": "0 deg"}},
+        "tethers": {"main": {
+            "from": "m0", "to": "mf", "length": f"{c['L0']} m", "EA": f"{c['EA']} N", "linear_density": f"{c['rho']} kg/m",
+            "damping": f"{c['damping']} N s", "model": "energy",
+            "initial": {"shape": "straight", "theta": "0 deg", "strain": strain}, "reel": reel}},
+        "integrator": {"method": "radau5", "rtol": 1e-9, "atol": 1e-9},
+        "output": {"count": count},
+    })  # fmt: skip
+
+
+def profile(run) -> dict:
+    """Time, deployed length, rate, exit tension and in-plane angle of a run (a phase's first row,
+    which repeats the last one's, dropped)."""
+    r = run.reel
+    dg = pd.concat([ph.diagnostics[["t_s", "main.theta_rad"]] for ph in run.phases], ignore_index=True)
+    keep = ~dg["t_s"].duplicated().to_numpy()
+    return {"t": r["t_s"].to_numpy()[keep], "L": r["deployed_length_m"].to_numpy()[keep],
+            "v": r["speed_m_s"].to_numpy()[keep], "T": r["exit_tension_N"].to_numpy()[keep],
+            "theta": dg["main.theta_rad"].to_numpy()[keep]}  # fmt: skip
+
+
+def oracle_angle(t_s: np.ndarray) -> np.ndarray:
+    """The rigid-rod pendulum's angle under the constant-speed law from rest at the vertical."""
+    c = RETRIEVAL
+    return libration(t_s, lambda t: c["L0"] - c["v"] * t, lambda t: -c["v"], omega_rad_s=omega(),
+                     mstar_kg=reduced_mass(), rho_kg_m=c["rho"])  # fmt: skip

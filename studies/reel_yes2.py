@@ -1,0 +1,64 @@
+"""A YES2-like two-stage deployment under the tension law in stages (docs/deployment.md 10.6, 15).
+
+YES2 (Foton-M3, 25 September 2007; ESA's technical facts and the mission's reconstruction): a
+22 kg deployer on the Foton capsule ejected MASS (8 kg) with the Fotino capsule (6 kg) towards
+the Earth at ~3 m/s on a 0.5 mm Dyneema line of ~31.7 km, from a 260-300 km orbit; the first stage
+went out to ~3.4 km, where the brake held it, and the second stage deployed fast to ~30 km.  The
+scene keeps that outline, not the flight's data: a 6.5 t spacecraft on a 280 km circular orbit, a
+14 kg end mass ejected downwards at 3 m/s with 200 m out, 0.19 g/m (the 0.5 mm line's section at
+970 kg/m^3: 6 kg over 31.7 km), EA 10 kN, damping 50 N s, rods of 2 km, paid from a drum under the
+tension law (k1 = 4, k2 = 1) about l_c = 3.4 km, then 30 km from the start of the stage, the
+command kept above 5 mN (a brake cannot push).  Not a reproduction: the flight used a barber-pole
+brake on a spool with its own control, not this law.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+
+from tetherlab.scene import Scene
+
+MU = 3.986004418e14  # m^3/s^2, the scene preset "earth" (tetherlab/scene/data.py)
+YES2 = dict(h=280e3, M=6500.0, m=14.0, line=31.7e3, L0=200.0, rho=1.9e-4, EA=1e4, v0=3.0, lc1=3400.0, lc2=30e3,
+            k1=4.0, k2=1.0, J=1e-3, R=0.1, stage2_orbits=2.0, orbits=4.0, tmin=0.005)  # fmt: skip
+
+
+def yes2_scene(*, count: int = 801):
+    c = YES2
+    a_m = 6378.137e3 + c["h"]
+    om = math.sqrt(MU / a_m**3)
+    mred = c["M"] * c["m"] / (c["M"] + c["m"])
+    start2 = c["stage2_orbits"] * 2.0 * math.pi / om
+    return Scene.from_dict({
+        "name": "yes2-like", "duration": f"{c['orbits']} orbits", "effects": {"central_gravity": {}},
+        "bodies": {"m0": {"mass": f"{c['M']} kg"}, "mf": {"mass": f"{c['m']} kg"}},
+        "orbit": {"reference": "center_of_mass", "motion": "corotating", "elements": {
+            "a": f"{a_m / 1e3} km", "e": 0.0, "i": "0 deg", "raan": "0 deg", "argp": "0 deg", "nu": "0 deg"}},
+        "tethers": {"main": {
+            "from": "m0", "to": "mf", "length": f"{c['L0']} m", "EA": f"{c['EA']} N", "linear_density": f"{c['rho']} kg/m",
+            "damping": "50 N s", "model": "energy", "initial": {"shape": "straight", "theta": "0 deg"},
+            "reel": {"law": "tension", "exit": "drum", "speed": f"{c['v0']} m/s", "rod_length": "2 km",
+                     "retire_length": "100 m", "stored_length": f"{c['line'] - c['L0']} m",
+                     "spool_inertia": f"{c['J']} kg m2", "drum_radius": f"{c['R']} m",
+                     "reduced_mass": f"{mred!r} kg", "orbit_rate": f"{om!r} rad/s", "commanded_length": f"{c['lc1']} m",
+                     "k1": c["k1"], "k2": c["k2"], "min_tension": f"{c['tmin']} N",
+                     "stages": [{"start": f"{start2!r} s", "commanded_length": f"{c['lc2']} m"}]}}},
+        "integrator": {"method": "radau5", "rtol": 1e-8, "atol": 1e-8},
+        "output": {"count": count},
+    })  # fmt: skip
+
+
+def yes2_profile(run) -> dict:
+    """Time, deployed length, rate, exit tension, in-plane angle and commanded length."""
+    from tetherlab.deployment import stage_length
+
+    r = run.reel
+    dg = pd.concat([ph.diagnostics[["t_s", "main.theta_rad"]] for ph in run.phases], ignore_index=True)
+    keep = ~dg["t_s"].duplicated().to_numpy()
+    sp = yes2_scene(count=3).tethers[0].reel.spool
+    t = r["t_s"].to_numpy()[keep]
+    return {"t": t, "L": r["deployed_length_m"].to_numpy()[keep], "v": r["speed_m_s"].to_numpy()[keep],
+            "T": r["exit_tension_N"].to_numpy()[keep], "theta": dg["main.theta_rad"].to_numpy()[keep],
+            "lc": [stage_length(sp, float(x)) for x in t]}  # fmt: skip
