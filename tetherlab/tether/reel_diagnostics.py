@@ -9,7 +9,8 @@ the power the exit takes out of the mechanical energy
 
 its Carnot part (a canister: 1/2 rho |L'|^3 (1 + eps)^2; a drum: 0), under a spool law its L'',
 torque, friction, the power taken by brake and friction, the spool's kinetic energy, the exit's
-own loss and the tension law's command (docs/deployment.md 10), and the material corrections
+own loss, the tension law's command, the motor's torque before its limit, the regulating brake's
+force and which limit is active (docs/deployment.md 10), and the material corrections
 of the first rod's shares: the TMED shares (tether/rod.py) count the affine field v_A + xi D', the
 material moves with v_A + xi D' + (1 - xi) w, w = lambda D, which adds
 
