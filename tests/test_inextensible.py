@@ -158,6 +158,7 @@ def test_drift_and_energy_bounded_and_the_unstabilised_control_drifts():
     assert on["drift_rate_1_s"] < X.DRIFT_BOUND
 
 
+@pytest.mark.slow  # ~30 s each: a 35-day run twice / four mode runs with the defect compiled in
 def test_orbit_drift_35_days_below_baumgarte_bound_and_controls_exceed_it():
     # docs/inextensible.md 6.3: 2 rtol x (steps per 1/a), a the mean motion: 2.2e-9 for 35 d at
     # 4 rods; measured 1.37e-9.  Both defects of the constraint must exceed it (rate zeroed:
@@ -171,6 +172,7 @@ def test_orbit_drift_35_days_below_baumgarte_bound_and_controls_exceed_it():
     assert off["drift_length"] > 100 * X.orbit_drift_bound(off)
 
 
+@pytest.mark.slow  # ~30 s each: a 35-day run twice / four mode runs with the defect compiled in
 def test_centripetal_defect_caught_by_the_rigid_chain_measurement():
     # without |d'|^2 the rods shorten by O((rod rate / a)^2), which bends the amplitude dependence
     # beyond the A^4 extrapolation: measured 3.4e-9 at 8 rods, mode 2, against the gate's 1e-10

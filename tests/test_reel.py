@@ -261,6 +261,9 @@ BAD_REELS = [
     ({"rod_length": "0 m"}, "tethers.main.reel.rod_length"),
     ({"rod_length": "-5 m"}, "tethers.main.reel.rod_length"),
     ({"retire_length": "0 m"}, "tethers.main.reel.retire_length"),
+    ({"retire_length": "-1 m"}, "tethers.main.reel.retire_length"),
+    ({"birth_length": "-10 m"}, "tethers.main.reel.birth_length"),
+    ({"birth_length": "0 m"}, "tethers.main.reel.birth_length"),
     ({"birth_length": "60 m"}, "tethers.main.reel.birth_length"),  # 60 < 12.5 + 50: no hysteresis
     ({"retire_length": "200 m", "birth_length": "400 m"}, "tethers.main.reel.retire_length"),  # below one rod
     ({"law": "spiral"}, "tethers.main.reel.law"),

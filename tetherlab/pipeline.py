@@ -324,6 +324,8 @@ def _spool_spec(reel) -> dict:
         friction_speed_m_s=sp.friction_speed_m_s, mstar_kg=sp.reduced_mass_kg, omega_rad_s=sp.orbit_rate_rad_s,
         lc_m=sp.commanded_length_m, k1=sp.k1, k2=sp.k2, tmin_N=sp.min_tension_N, tmax_N=sp.max_tension_N,
         twidth_N=sp.limit_width_N, birth_length_m=reel.birth_length_m, retire_length_m=reel.retire_length_m,
+        max_torque_N_m=sp.max_torque_N_m, torque_width_N_m=sp.torque_limit_width_N_m, max_speed_m_s=sp.max_speed_m_s,
+        speed_gain_N_s_m=sp.speed_brake_gain_N_s_m, speed_width_m_s=sp.speed_limit_width_m_s,
     )
 
 

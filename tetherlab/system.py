@@ -64,6 +64,12 @@ class ReelSpec:
     tmin_N: float = 0.0
     tmax_N: float = 0.0
     twidth_N: float = 0.0  # 0: no limits
+    # the spool laws' smooth limits on the motor's torque and on the pay-out speed (10.4)
+    max_torque_N_m: float = 0.0  # 0: none
+    torque_width_N_m: float = 0.0
+    max_speed_m_s: float = 0.0
+    speed_gain_N_s_m: float = 0.0
+    speed_width_m_s: float = 0.0  # 0: no speed limit
     birth_length_m: float = 0.0  # the first rod's bounds: located events under a spool law
     retire_length_m: float = 0.0
 
@@ -491,6 +497,11 @@ def _write_reel(v, i: int, k: int, body: int, g0: int, t: TetherSpec, body_mass_
                  "mstar_kg", "omega_rad_s", "lc_m", "k1", "k2", "tmin_N", "tmax_N"):
         setattr(rv, name, getattr(r, name))
     rv.twidth_N = r.twidth_N
+    rv.max_torque_N_m = r.max_torque_N_m
+    rv.torque_width_N_m = r.torque_width_N_m
+    rv.max_speed_m_s = r.max_speed_m_s
+    rv.speed_gain_N_s_m = r.speed_gain_N_s_m
+    rv.speed_width_m_s = r.speed_width_m_s
     rv.birth_m = r.birth_length_m
     rv.retire_m = r.retire_length_m
     rv.exit = {"canister": P.REEL_EXIT_CANISTER, "drum": P.REEL_EXIT_DRUM}[r.exit]

@@ -38,6 +38,8 @@ DEFECT_REEL_NO_EXIT_TORQUE = 26   # a reel on a rigid body without the torque of
 DEFECT_REEL_NO_RING = 27          # a reel on a rigid body without the ring's angular momentum left in the body (tether/reel_hub.py)
 DEFECT_SPOOL_UNCOUPLED = 28       # the spool's L'' solved with the exit tension at L'' = 0 (tether/reel_spool.py)
 DEFECT_TENSION_K2_SIGN = 29       # the tension law with the sign of its rate gain k2 flipped (tether/reel_spool.py)
+DEFECT_SPOOL_TORQUE_UNLIMITED = 30  # the spool's balance with the motor's unlimited torque, its outputs with the limited one (tether/reel_spool.py)
+DEFECT_SPOOL_NO_SPEED_BRAKE = 31    # the spool's balance without the regulating brake, its outputs with it (tether/reel_spool.py)
 DEFECT_INEXT_NO_VSQ = 41          # the inextensible rod's constraint without |d'|^2 in kappa (tether/inextensible.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL

@@ -156,7 +156,7 @@ ROD = Record("rod", "RT_", 8, (
        doc="inextensible tethers: Baumgarte rate a of its length constraint, phi'' + 2a phi' + a^2 phi = 0"),
 ))
 
-REEL = Record("reel", "RL_", 36, (
+REEL = Record("reel", "RL_", 41, (
     _i("tether", "RL_TETH", "tether it pays out (at its end A_1)"),
     _i("body", "RL_BODY", "body carrying it (kernel order): the tether's parent"),
     _i("rod", "RL_ROD", "global index of the variable rod next to the reel (the tether's first)"),
@@ -191,6 +191,12 @@ REEL = Record("reel", "RL_", 36, (
     _f("twidth_N", "RL_TW", unit="N", doc="tension law: the width of the limits' smooth corner"),
     _f("birth_m", "RL_LBIRTH", unit="m", doc="spool laws: the first rod's birth bound (a located event)"),
     _f("retire_m", "RL_LRETIRE", unit="m", doc="spool laws: the first rod's retirement bound (a located event)"),
+    # the spool laws' smooth limits (docs/deployment.md 10.4)
+    _f("max_torque_N_m", "RL_QMAX", unit="N m", doc="spool laws: the motor's torque limit |tau| <= tau_max (0: none)"),
+    _f("torque_width_N_m", "RL_QW", unit="N m", doc="spool laws: the width of the torque limit's smooth corner"),
+    _f("max_speed_m_s", "RL_VMAX", unit="m/s", doc="spool laws: the speed above which the regulating brake engages"),
+    _f("speed_gain_N_s_m", "RL_VGAIN", unit="N s/m", doc="spool laws: the regulating brake's force per m/s beyond it"),
+    _f("speed_width_m_s", "RL_VW", unit="m/s", doc="spool laws: the width of the speed limit's smooth corner (0: none)"),
 ))
 
 EFFECT = Record("effect", "ET_", 4, (
@@ -255,6 +261,8 @@ REEL_SCRATCH = Record("reel_scratch", "RS_", 16, (
     _f("command_N", "RS_TCMD", unit="N", doc="tension law: the commanded exit tension"),
     _f("spool_mass_kg", "RS_MEFF", unit="kg", doc="spool laws: J/R^2 + rho (stored) on a drum, 0 on a canister"),
     _f("exit_tension_N", "RS_TEX", unit="N", doc="spool laws: the line's tension at the exit, -J_0.u"),
+    _f("torque_command_N_m", "RS_QCMD", unit="N m", doc="spool laws: the motor's torque before its limit"),
+    _f("speed_brake_N", "RS_FV", unit="N", doc="spool laws: the speed-regulating brake's force against the pay-out"),
 ))
 
 RECORDS = (TETHER, BODY, WHEEL, ROD, EFFECT, REEL, BODY_SCRATCH, TETHER_SCRATCH, WHEEL_SCRATCH, ROD_SCRATCH,

@@ -255,6 +255,13 @@ class SpoolLaw:
     # law 'tension': later stages (start time, commanded length), start strictly increasing and > 0;
     # commanded_length_m holds from t = 0 to the first start (docs/deployment.md 10.6)
     stages: tuple = ()
+    # either law: the motor's torque within |tau| <= max_torque, and a regulating brake of gain
+    # speed_brake_gain engaging above |L'| = max_speed, both through smooth corners (10.4)
+    max_torque_N_m: float = 0.0  # 0: no limit
+    torque_limit_width_N_m: float = 0.0
+    max_speed_m_s: float = 0.0  # 0: no limit
+    speed_brake_gain_N_s_m: float = 0.0
+    speed_limit_width_m_s: float = 0.0
 
 
 @dataclass(frozen=True)

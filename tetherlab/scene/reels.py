@@ -14,7 +14,8 @@ from .data import REEL_EXITS, REEL_LAWS, Reel, SpoolLaw
 from .keys import _choice, _number, _quantity, _required, _table, _vector
 
 #: the spool laws' keys (docs/deployment.md 10, docs/scenes.md)
-_SPOOL_KEYS = ("spool_inertia", "drum_radius", "torque", "viscous_friction", "coulomb_friction", "friction_speed")
+_SPOOL_KEYS = ("spool_inertia", "drum_radius", "torque", "viscous_friction", "coulomb_friction", "friction_speed",
+               "max_torque", "torque_limit_width", "max_speed", "speed_brake_gain", "speed_limit_width")
 _TENSION_KEYS = ("reduced_mass", "orbit_rate", "commanded_length", "k1", "k2", "min_tension", "max_tension",
                  "limit_width", "stages")
 #: the keys of one entry of a tension law's `stages` (docs/deployment.md 10.6)
@@ -25,6 +26,11 @@ VISCOUS = Kind("N s / m", "a viscous friction coefficient (force per speed)", "2
 #: default v_s of the Coulomb friction's smooth sign tanh(L'/v_s): 1 cm/s, below any pay-out
 #: speed of interest and wide enough for the implicit integrators' Newton iteration
 FRICTION_SPEED_DEFAULT = "0.01 m/s"
+
+#: the smooth limits' default corner width, as a fraction of the limit, and the widest allowed (a
+#: wider corner bends the law far inside the limit: at zero torque the corners of +-tau_max meet)
+LIMIT_WIDTH_DEFAULT = 0.01
+LIMIT_WIDTH_MAX = 0.1
 
 #: a drum's axis must be perpendicular to its exit direction within this cosine (its rim moves along
 #: the exit direction where the line leaves it)
@@ -146,7 +152,7 @@ def _spool_law(table, path: str, law: str, exit_: str, length_m: float) -> Spool
             raise SceneError(f"{path}.spool_inertia", "no spool inertia with exit 'canister' (the line leaves a "
                              "canister at rest: no spool turns; use exit = 'drum')", shown(table["spool_inertia"]))  # fmt: skip
         inertia = 0.0
-    needs_radius = drum or "torque" in table
+    needs_radius = drum or "torque" in table or "max_torque" in table
     radius = 0.0
     if needs_radius:
         radius = _quantity(_required(table, "drum_radius", path, f"{LENGTH.describe()} (the torque's arm)"),
@@ -158,8 +164,9 @@ def _spool_law(table, path: str, law: str, exit_: str, length_m: float) -> Spool
                         nonnegative=True)  # fmt: skip
     coulomb = _quantity(table.get("coulomb_friction", "0 N"), f"{path}.coulomb_friction", FORCE, nonnegative=True)
     vs = _quantity(table.get("friction_speed", FRICTION_SPEED_DEFAULT), f"{path}.friction_speed", SPEED, positive=True)
+    limits = _limits(table, path, law, torque)
     if law == "spool":
-        return SpoolLaw(inertia, radius, torque, viscous, coulomb, vs)
+        return SpoolLaw(inertia, radius, torque, viscous, coulomb, vs, **limits)
     mstar = _quantity(_required(table, "reduced_mass", path, MASS.describe()), f"{path}.reduced_mass", MASS,
                       positive=True)  # fmt: skip
     omega = _quantity(_required(table, "orbit_rate", path, ANGULAR_RATE.describe()), f"{path}.orbit_rate",
@@ -181,7 +188,8 @@ def _spool_law(table, path: str, law: str, exit_: str, length_m: float) -> Spool
         raise SceneError(f"{path}.limit_width", "a min_tension or max_tension for it to round", shown(table["limit_width"]))
     del length_m
     stages = _stages(table, path) if "stages" in table else ()
-    return SpoolLaw(inertia, radius, 0.0, viscous, coulomb, vs, mstar, omega, lc, k1, k2, tmin, tmax, width, stages)
+    return SpoolLaw(inertia, radius, 0.0, viscous, coulomb, vs, mstar, omega, lc, k1, k2, tmin, tmax, width, stages,
+                    **limits)
 
 
 def _stages(table, path: str) -> tuple:
@@ -208,6 +216,47 @@ def _stages(table, path: str) -> tuple:
                              f"({before:.6g} s): stages in order of time", f"{start:.6g} s")  # fmt: skip
         out.append((start, lc))
     return tuple(out)
+
+
+def _limit_width(table, path: str, key: str, limit: float, kind, unit: str) -> float:
+    """The corner width of a smooth limit: LIMIT_WIDTH_DEFAULT of the limit unless given, positive
+    and at most LIMIT_WIDTH_MAX of it."""
+    if key not in table:
+        return LIMIT_WIDTH_DEFAULT * limit
+    width = _quantity(table[key], f"{path}.{key}", kind, positive=True)
+    if width > LIMIT_WIDTH_MAX * limit:
+        raise SceneError(f"{path}.{key}", f"at most {LIMIT_WIDTH_MAX:g} of the limit ({LIMIT_WIDTH_MAX * limit:.6g} "
+                         f"{unit}: a wider corner bends the law far inside the limit)", f"{width:.6g} {unit}")  # fmt: skip
+    return width
+
+
+def _limits(table, path: str, law: str, torque: float) -> dict:
+    """The smooth limits of either spool law (docs/deployment.md 10.4): the motor's torque within
+    |tau| <= max_torque, and a regulating brake of gain speed_brake_gain engaging above
+    |L'| = max_speed.  Each width key needs its limit; the speed limit needs its brake's gain."""
+    out: dict = {}
+    if "max_torque" in table:
+        tmax = _quantity(table["max_torque"], f"{path}.max_torque", TORQUE, positive=True)
+        if law == "spool" and abs(torque) > tmax:
+            raise SceneError(f"{path}.torque", f"at most max_torque ({tmax:.6g} N m) in magnitude (a constant torque "
+                             "beyond the limit would never be applied)", f"{torque:.6g} N m")  # fmt: skip
+        out["max_torque_N_m"] = tmax
+        out["torque_limit_width_N_m"] = _limit_width(table, path, "torque_limit_width", tmax, TORQUE, "N m")
+    elif "torque_limit_width" in table:
+        raise SceneError(f"{path}.torque_limit_width", "a max_torque for it to round", shown(table["torque_limit_width"]))
+    if "max_speed" in table:
+        vmax = _quantity(table["max_speed"], f"{path}.max_speed", SPEED, positive=True)
+        gain = _quantity(_required(table, "speed_brake_gain", path, f"{VISCOUS.describe()} (the regulating brake's "
+                                   "force per m/s beyond max_speed)"), f"{path}.speed_brake_gain", VISCOUS,
+                         positive=True)  # fmt: skip
+        out["max_speed_m_s"] = vmax
+        out["speed_brake_gain_N_s_m"] = gain
+        out["speed_limit_width_m_s"] = _limit_width(table, path, "speed_limit_width", vmax, SPEED, "m/s")
+    else:
+        for key in ("speed_brake_gain", "speed_limit_width"):
+            if key in table:
+                raise SceneError(f"{path}.{key}", "a max_speed for the regulating brake to hold", shown(table[key]))
+    return out
 
 
 def _table_law(table, path: str, length_m: float) -> tuple[tuple, tuple]:

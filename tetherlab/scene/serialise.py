@@ -257,6 +257,13 @@ def _spool_dict(r) -> dict:
         out["spool_inertia"] = format_si(sp.spool_inertia_kg_m2, MOMENT_OF_INERTIA)
     if sp.drum_radius_m > 0.0:
         out["drum_radius"] = format_si(sp.drum_radius_m, LENGTH)
+    if sp.max_torque_N_m > 0.0:
+        out["max_torque"] = format_si(sp.max_torque_N_m, TORQUE)
+        out["torque_limit_width"] = format_si(sp.torque_limit_width_N_m, TORQUE)
+    if sp.max_speed_m_s > 0.0:
+        out["max_speed"] = format_si(sp.max_speed_m_s, SPEED)
+        out["speed_brake_gain"] = format_si(sp.speed_brake_gain_N_s_m, VISCOUS)
+        out["speed_limit_width"] = format_si(sp.speed_limit_width_m_s, SPEED)
     if r.law == "spool":
         out["torque"] = format_si(sp.torque_N_m, TORQUE)
         return out

@@ -9,7 +9,8 @@ the power the exit takes out of the mechanical energy
 
 its Carnot part (a canister: 1/2 rho |L'|^3 (1 + eps)^2; a drum: 0), under a spool law its L'',
 torque, friction, the power taken by brake and friction, the spool's kinetic energy, the exit's
-own loss and the tension law's command (docs/deployment.md 10), and the material corrections
+own loss, the tension law's command, the motor's torque before its limit, the regulating brake's
+force and which limit is active (docs/deployment.md 10), and the material corrections
 of the first rod's shares: the TMED shares (tether/rod.py) count the affine field v_A + xi D', the
 material moves with v_A + xi D' + (1 - xi) w, w = lambda D, which adds
 
@@ -39,11 +40,15 @@ from ..kernel.layout import (
     REEL_EXIT_CANISTER,
     RL_BODY,
     RL_EXIT,
+    RL_QMAX,
     RL_RHO,
     RL_ROD,
     RL_SOFF,
     RL_SIZE,
     RL_TETH,
+    RL_VMAX,
+    RL_VW,
+    RS_FV,
     RS_JUMP,
     RS_L,
     RS_LAM,
@@ -53,6 +58,7 @@ from ..kernel.layout import (
     RS_LDD,
     RS_LROD,
     RS_MEFF,
+    RS_QCMD,
     RS_TAU,
     RS_TCMD,
     RS_SIZE,
@@ -78,6 +84,7 @@ REEL_COLUMNS = (
     "deployed_length_m", "speed_m_s", "rod_length_m", "exit_speed_m_s", "exit_tension_N", "exit_jump_N",
     "body_pull_N", "exit_power_W", "carnot_power_W", "dpx", "dpy", "dpz", "dhx", "dhy", "dhz", "dke", "rod_force_N",
     "accel_m_s2", "torque_N_m", "friction_N", "brake_power_W", "spool_kinetic_J", "exit_loss_power_W", "command_N",
+    "torque_command_N_m", "speed_brake_N", "limit_active",
 )  # fmt: skip
 R_NCOL = len(REEL_COLUMNS)
 
@@ -176,7 +183,17 @@ def reel_rows(ts, Y, p, out, acc, datt):
                 else:
                     o[22] = ld * eps * (tens - 0.5 * ea * eps) - 0.5 * rho * ld * ld * ld * eps * eps
                 o[23] = p[rs + RS_TCMD]
+                # the limits (10.4): the motor's torque before its limit, the regulating brake, and
+                # which limit the law is beyond (1: the torque's, 2: the speed's, 3: both)
+                o[24] = p[rs + RS_QCMD]
+                o[25] = p[rs + RS_FV]
+                active = 0.0
+                if p[rb + RL_QMAX] > 0.0 and abs(p[rs + RS_QCMD]) > p[rb + RL_QMAX]:
+                    active += 1.0
+                if p[rb + RL_VW] > 0.0 and abs(ld) > p[rb + RL_VMAX]:
+                    active += 2.0
+                o[26] = active
             else:
-                for c in range(18, 24):
+                for c in range(18, R_NCOL):
                     o[c] = 0.0
     return -1

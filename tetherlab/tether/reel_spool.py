@@ -12,9 +12,12 @@ at the rim (docs/deployment.md 10.1):
   (the material leaves from rest);
 * m_s = J/R^2 + rho (stored length) on a drum (the spool and the turns still on it), 0 on a
   canister (no spool: the brake holds the line where it leaves);
-* F_b = tau/R + c L' + F_c tanh(L'/v_s) the force of the brake or motor and the friction
-  against the pay-out; the law ``tension`` sets tau/R to the commanded tension
-  T_c = m* Omega^2 [3 l_c + k1 (L - l_c) + k2 L'/Omega], smoothly limited.
+* F_b = tau/R + c L' + F_c tanh(L'/v_s) + F_v the force of the brake or motor, the friction and
+  the speed-regulating brake against the pay-out; the law ``tension`` sets tau/R to the commanded
+  tension T_c = m* Omega^2 [3 l_c + k1 (L - l_c) + k2 L'/Omega], smoothly limited; the motor's
+  torque tau is smoothly limited to |tau| <= tau_max and F_v engages smoothly above |L'| = v_max
+  (docs/deployment.md 10.4).  Every term is a function of (L, L') alone, so the L'' solve stays
+  exact and the work of the limited torque and of the regulating brake is in W_b.
 
 T depends on L'' through the first rod's apparent load (kappa = l''/l - 2 lambda^2, tether/reel.py),
 and on nothing else that L'' changes: every reaction is affine in it.  So the solve is exact, not
@@ -31,6 +34,8 @@ import numpy as np
 
 from .._jit import njit
 from ..kernel.layout import (
+    DEFECT_SPOOL_NO_SPEED_BRAKE,
+    DEFECT_SPOOL_TORQUE_UNLIMITED,
     DEFECT_SPOOL_UNCOUPLED,
     DEFECT_TENSION_K2_SIGN,
     H_MUTANT,
@@ -53,6 +58,8 @@ from ..kernel.layout import (
     RL_MEFF,
     RL_MSTAR,
     RL_OMEGA,
+    RL_QMAX,
+    RL_QW,
     RL_R,
     RL_RHO,
     RL_ROD,
@@ -63,11 +70,16 @@ from ..kernel.layout import (
     RL_TMAX,
     RL_TMIN,
     RL_TW,
+    RL_VGAIN,
+    RL_VMAX,
     RL_VS,
+    RL_VW,
     RS_FB,
     RS_FR,
+    RS_FV,
     RS_LDD,
     RS_MEFF,
+    RS_QCMD,
     RS_SIZE,
     RS_TAU,
     RS_TCMD,
@@ -122,6 +134,23 @@ def tension_command(p, rb, L, Ld):
 
 
 @njit(cache=True)
+def limited_torque(tau, tmax, w):
+    """The motor's torque within |tau| <= tau_max through softplus corners of width w
+    (docs/deployment.md 10.4): first bent above -tau_max, then below +tau_max; the result is
+    below tau_max always and above -tau_max - w e^(-2 tau_max/w)."""
+    lo = -tmax + _softplus(tau + tmax, w)
+    return tmax - _softplus(tmax - lo, w)
+
+
+@njit(cache=True)
+def speed_brake(Ld, vmax, gain, w):
+    """The speed-regulating brake's force against the pay-out (docs/deployment.md 10.4):
+    gain [softplus(L' - v_max) - softplus(-L' - v_max)], odd in L', so its power F L' >= 0 (it only
+    dissipates); below v_max it is within gain w e^(-(v_max - |L'|)/w) of zero."""
+    return gain * (_softplus(Ld - vmax, w) - _softplus(-Ld - vmax, w))
+
+
+@njit(cache=True)
 def spool_forces(p, i, L, Ld, eps):
     """Reel i's (m_s, j, F_b) of the balance m_s L'' = T - j - F_b (module docstring), and its
     torque, friction and command into the scratch."""
@@ -144,15 +173,29 @@ def spool_forces(p, i, L, Ld, eps):
         tc = tension_command(p, rb, L, Ld)
         p[rs + RS_TCMD] = tc
         tau_r = tc  # the motor's torque over R
-        p[rs + RS_TAU] = tc * R
+        p[rs + RS_QCMD] = tc * R
     else:
         tau_r = p[rb + RL_TAU] / R if R > 0.0 else 0.0
         p[rs + RS_TCMD] = 0.0
-        p[rs + RS_TAU] = p[rb + RL_TAU]
+        p[rs + RS_QCMD] = p[rb + RL_TAU]
+    tau = p[rs + RS_QCMD]
+    if p[rb + RL_QMAX] > 0.0:  # the scene asks for a drum radius with a torque limit
+        tau = limited_torque(tau, p[rb + RL_QMAX], p[rb + RL_QW])
+        tau_r = tau / R
+    p[rs + RS_TAU] = tau
+    fv = 0.0
+    if p[rb + RL_VW] > 0.0:
+        fv = speed_brake(Ld, p[rb + RL_VMAX], p[rb + RL_VGAIN], p[rb + RL_VW])
+    p[rs + RS_FV] = fv
     p[rs + RS_FR] = fr
-    p[rs + RS_FB] = tau_r + fr
+    p[rs + RS_FB] = tau_r + fr + fv
     p[rs + RS_MEFF] = ms
-    return ms, jump, tau_r + fr
+    defect = int(p[H_MUTANT])
+    if defect == DEFECT_SPOOL_TORQUE_UNLIMITED and p[rb + RL_QMAX] > 0.0:
+        return ms, jump, p[rs + RS_QCMD] / R + fr + fv
+    if defect == DEFECT_SPOOL_NO_SPEED_BRAKE:
+        return ms, jump, tau_r + fr
+    return ms, jump, tau_r + fr + fv
 
 
 @njit(cache=True)
