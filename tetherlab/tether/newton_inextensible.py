@@ -95,7 +95,7 @@ def structure_supported(p, n_state, second_order):
     if int(p[H_NTETH]) != 1 or int(p[H_NROOT]) != 1 or int(p[H_NRIGID]) != 0 or int(p[H_NREEL]) != 0:
         return "not one inextensible tether between point masses (several tethers, roots, rigid bodies or reels)"
     nrods = int(p[H_NRODS])
-    m1 = 3 + 3 * nrods
+    m1 = 3 * int(p[H_NROOT]) + 3 * nrods  # the root's position, then each rod's d (one root: checked above)
     if int(p[H_NSTATE]) != n_state or int(second_order) != m1 or int(p[H_NQT]) != m1 or n_state != 2 * m1:
         return f"state of {n_state} components is not [r0, d_1..d_{nrods}, rates]"
     offb = int(p[H_OFF_BODY])
