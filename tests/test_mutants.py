@@ -155,3 +155,31 @@ def test_the_harness_fills_the_matrix_for_a_fast_pair():
     # the other defects were not run here, so they count as uncaught
     assert vals["mutation_uncaught_defects"] == len(mutants.names()) - 1
     assert "de421_fit_error" in verify.matrix_md(cells, GATES, by_defect, by_gate)
+
+
+def test_a_probe_that_raises_catches_the_defect_but_gives_no_gate_teeth(monkeypatch):
+    # verify.run_negative_controls: a probe that refuses to run under a defect marks its cells
+    # "raised" (RAISED in the matrix); mutation_summary counts the defect caught and credits no gate
+    from tetherlab import ephemeris
+    from tetherlab.verify import controls
+
+    def probe(rows):
+        if ephemeris.DEGREE == 5:  # the defect de421_low_degree is on
+            raise ValueError("deliberate refusal")
+        return {"de421_fit_error": 0.0}
+
+    monkeypatch.setattr(controls, "PROBES", [("fake", probe, {"de421"})])
+    monkeypatch.setitem(controls._PROBE_GATES, "fake", ["de421_fit_error"])
+    rows = []
+    cells, baseline = controls.run_negative_controls(rows, GATES, names=["de421_low_degree"])
+    assert baseline == {"de421_fit_error": 0.0}
+    assert cells == {("de421_low_degree", "de421_fit_error"): (None, controls.RAISED)}
+    assert any("deliberate refusal" in r.get("error", "") for r in rows)
+    by_defect, by_gate, _ = verify.mutation_summary(cells, GATES, {})
+    assert by_defect["de421_low_degree"] == ["de421_fit_error (raised)"]
+    assert by_gate["de421_fit_error"] == []
+    assert "RAISED" in verify.matrix_md(cells, GATES, by_defect, by_gate)
+    # a measured failure, by contrast, gives the gate its teeth
+    cells = {("de421_low_degree", "de421_fit_error"): (1e9, "caught")}
+    _by_defect, by_gate, _ = verify.mutation_summary(cells, GATES, {})
+    assert by_gate["de421_fit_error"] == ["de421_low_degree"]
