@@ -89,12 +89,19 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
              ("deployment_frozen_negative_control", "reel_law_frozen", "deployment_retrieval_invariant"),
              ("deployment_hub_exit_torque_negative_control", "reel_hub_exit_torque_dropped",
               "deployment_hub_angular_momentum_over_bound"),
-             ("deployment_hub_ring_negative_control", "reel_hub_ring_dropped", "deployment_hub_axis_spin_over_bound"))
+             ("deployment_hub_ring_negative_control", "reel_hub_ring_dropped", "deployment_hub_axis_spin_over_bound"),
+             ("deployment_limits_torque_unlimited_negative_control", "spool_torque_unlimited",
+              "deployment_limits_energy_over_bound"),
+             ("deployment_limits_no_speed_brake_negative_control", "spool_no_speed_brake",
+              "deployment_limits_speed_over_budget"),
+             ("deployment_limits_one_sided_negative_control", "spool_torque_one_sided",
+              "deployment_limits_torque_over_budget"))
     for ctrl_gate, defect, gate in pairs:
         assert ParamView(_reel_params(defect)).defect == getattr(L, "DEFECT_" + {
             "reel_rescaled": "REEL_RESCALED", "reel_strain_rate_without_ldot": "REEL_NO_LDOT",
             "reel_law_frozen": "REEL_FROZEN", "reel_hub_exit_torque_dropped": "REEL_NO_EXIT_TORQUE",
-            "reel_hub_ring_dropped": "REEL_NO_RING"}[defect])
+            "reel_hub_ring_dropped": "REEL_NO_RING", "spool_torque_unlimited": "SPOOL_TORQUE_UNLIMITED",
+            "spool_no_speed_brake": "SPOOL_NO_SPEED_BRAKE", "spool_torque_one_sided": "SPOOL_TORQUE_ONE_SIDED"}[defect])
         thr = GATES[ctrl_gate]["threshold"]
         for ctrl, expect in ((0.5 * thr, True), (2.0 * thr, False), (None, False)):
             by_defect, _by_gate, _ = verify.mutation_summary({}, GATES, {ctrl_gate: ctrl})

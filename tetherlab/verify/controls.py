@@ -259,6 +259,13 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         ("deployment_spool_uncoupled_negative_control", "spool_uncoupled",
          ("deployment_spool_drum_over_budget", "deployment_spool_energy_over_bound")),
         ("deployment_tension_k2_negative_control", "tension_k2_flipped", ("deployment_tension_roots_over_budget",)),
+        ("deployment_limits_torque_unlimited_negative_control", "spool_torque_unlimited",
+         ("deployment_limits_balance_over_bound", "deployment_limits_energy_over_bound")),
+        ("deployment_limits_no_speed_brake_negative_control", "spool_no_speed_brake",
+         ("deployment_limits_speed_over_budget", "deployment_limits_balance_over_bound",
+          "deployment_limits_energy_over_bound")),
+        ("deployment_limits_one_sided_negative_control", "spool_torque_one_sided",
+         ("deployment_limits_torque_over_budget",)),
     ):  # fmt: skip
         ctrl = study_values.get(ctrl_gate)
         if ctrl is not None and ctrl <= gates[ctrl_gate]["threshold"]:
