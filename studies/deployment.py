@@ -53,13 +53,18 @@ K. A YES2-like two-stage deployment (studies/reel_yes2.py): the tension law in s
    the commanded length in a figure.
 L. Retrieval of 5 km to 100 m (studies/reel_retrieval.py, docs/deployment.md 14): at constant speed
    (the growing libration) and under the tension law in stages (held); no gate here (the
-   comparison with the rigid-rod pendulum and its control are tests: tests/test_reel_stages.py).
+   comparison with the rigid-rod pendulum is part N).
 M. The spool limits (studies/reel_limits.py, docs/deployment.md 10.4): a drum in uniform gravity under
    the tension law with its motor's torque limited and a regulating brake on the speed, both
    limits pressed: the torque bound, the speed bound from the balance at the fastest point, the
    balance the outputs report (to round-off) and the energy balance (10.3). Controls: the unlimited
    command in the balance (DEFECT_SPOOL_TORQUE_UNLIMITED), the brake out of it
    (DEFECT_SPOOL_NO_SPEED_BRAKE), the limit's upper corner dropped (DEFECT_SPOOL_TORQUE_ONE_SIDED).
+N. Part L's constant-speed retrieval against the reeled pendulum (tetherlab/oracles/reeled_pendulum.py)
+   while l >= 500 m, at every output within a budget derived term by term (docs/deployment.md 14.1:
+   the field's P3 term, the line's inertia, its sag, its strain, each through the linearised
+   pendulum's response, plus twice the run's difference from the same run at a tenth of its rtol).
+   Control: a kernel that ignores the law (DEFECT_REEL_FROZEN).
 
     PYTHONPATH=. python studies/deployment.py OUTDIR [--quiet]
 """
@@ -590,6 +595,38 @@ def part_limits():
     return rows, gates, m
 
 
+def part_retrieval_pendulum():
+    """N: the constant-speed retrieval of part L against the reeled pendulum, with the budget
+    derived term by term (docs/deployment.md 14.1), and the frozen law as its control."""
+    from studies import reel_retrieval as R
+
+    run = simulate_reel(R.retrieval_scene(), progress=False, raise_on_failure=False)
+    fine = simulate_reel(R.fine_scene(), progress=False, raise_on_failure=False)
+    if not (run.ok and fine.ok):
+        raise RuntimeError(f"part N: the retrieval failed: {run.message} / {fine.message}")
+    m = R.pendulum_measure(run, fine)
+    if m["oracle_max"] < math.radians(80.0):  # the instability must be inside the window
+        raise RuntimeError(f"part N: the pendulum's angle reaches {math.degrees(m['oracle_max']):.1f} deg only")
+    ctrl = simulate_reel(R.retrieval_scene(), progress=False, defect=DEFECT_REEL_FROZEN, raise_on_failure=False)
+    # a refused control run shows no teeth: its gate then fails
+    c_ratio = R.pendulum_measure(ctrl, None)["ratio"] if ctrl.ok else 0.0
+    i = m["worst"]
+    parts = ", ".join(f"{k} {math.degrees(v[i]):.3f}" for k, v in m["terms"].items())
+    j = len(m["t"]) - 1
+    rows = [
+        {"case": "N retrieval vs reeled pendulum: worst |theta - theta_p| / budget(t)", "value": m["ratio"],
+         "bound": 1.0, "over bound": m["ratio"], "unit": "1",
+         "note": f"at t = {m['t'][i]:.0f} s: {math.degrees(m['err'][i]):.3f} deg against {math.degrees(m['budget'][i]):.3f} "
+                 f"({parts} deg); at l = {R.WINDOW_M:g} m: {math.degrees(m['err'][j]):.3f} against "
+                 f"{math.degrees(m['budget'][j]):.3f} deg; the pendulum reaches {math.degrees(m['oracle_max']):.1f} deg"},
+        {"case": "control frozen law: the same", "value": c_ratio, "bound": 1.0, "over bound": c_ratio, "unit": "1",
+         "note": "must exceed 1"},
+    ]  # fmt: skip
+    gates = {"deployment_retrieval_pendulum_over_budget": m["ratio"],
+             "deployment_retrieval_pendulum_frozen_negative_control": 1.0 / c_ratio if c_ratio > 0 else math.inf}
+    return rows, gates, m
+
+
 def scene_figures(out: Path, yes2: dict | None, retr: dict | None) -> list[str]:
     """K: the YES2-like run's length, commanded length, rate, tension and angle; L: the two
     retrievals' angle and length, the rigid-rod pendulum beside the constant-speed one."""
@@ -944,7 +981,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir", type=Path)
     ap.add_argument("--quiet", action="store_true")
-    ap.add_argument("--parts", default="ABCDEFGHIJKLM", help="parts to run (A and C run together)")
+    ap.add_argument("--parts", default="ABCDEFGHIJKLMN", help="parts to run (A and C run together)")
     args = ap.parse_args(argv)
     out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
@@ -971,7 +1008,8 @@ def main(argv=None) -> int:
         run_part("A+C", part_free)
     for name, part in (("B", lambda: (*part_birth(), None)), ("D", part_retire), ("E", part_exponential),
                        ("F", part_retrieval), ("G", part_convergence), ("H", part_hub), ("I", part_spool),
-                       ("J", part_seds), ("K", part_yes2), ("L", part_retrieval_law), ("M", part_limits)):  # fmt: skip
+                       ("J", part_seds), ("K", part_yes2), ("L", part_retrieval_law), ("M", part_limits),
+                       ("N", part_retrieval_pendulum)):  # fmt: skip
         if name in args.parts:
             run_part(name, part)
     free = found.get("A+C")

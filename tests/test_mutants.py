@@ -95,7 +95,9 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
              ("deployment_limits_no_speed_brake_negative_control", "spool_no_speed_brake",
               "deployment_limits_speed_over_budget"),
              ("deployment_limits_one_sided_negative_control", "spool_torque_one_sided",
-              "deployment_limits_torque_over_budget"))
+              "deployment_limits_torque_over_budget"),
+             ("deployment_retrieval_pendulum_frozen_negative_control", "reel_law_frozen",
+              "deployment_retrieval_pendulum_over_budget"))
     for ctrl_gate, defect, gate in pairs:
         assert ParamView(_reel_params(defect)).defect == getattr(L, "DEFECT_" + {
             "reel_rescaled": "REEL_RESCALED", "reel_strain_rate_without_ldot": "REEL_NO_LDOT",

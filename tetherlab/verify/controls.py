@@ -248,6 +248,8 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         ("deployment_no_ldot_negative_control", "reel_strain_rate_without_ldot",
          ("deployment_exponential_angle_over_budget", "deployment_exponential_tension_over_budget")),
         ("deployment_frozen_negative_control", "reel_law_frozen", ("deployment_retrieval_invariant",)),
+        ("deployment_retrieval_pendulum_frozen_negative_control", "reel_law_frozen",
+         ("deployment_retrieval_pendulum_over_budget",)),
         # (the remap is Python: deployment.retire_state's P-only correction, run by the study itself)
         ("deployment_retirement_linear_only_negative_control", "retire_remap_linear_only",
          ("deployment_retirement_angmom_over_bound",)),

@@ -195,6 +195,9 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_limits_torque_unlimited_negative_control": g.get("deployment_limits_torque_unlimited_negative_control"),
         "deployment_limits_no_speed_brake_negative_control": g.get("deployment_limits_no_speed_brake_negative_control"),
         "deployment_limits_one_sided_negative_control": g.get("deployment_limits_one_sided_negative_control"),
+        # part N: the retrieval against the reeled pendulum (studies/reel_retrieval.py, docs/deployment.md 14.1)
+        "deployment_retrieval_pendulum_over_budget": g.get("deployment_retrieval_pendulum_over_budget"),
+        "deployment_retrieval_pendulum_frozen_negative_control": g.get("deployment_retrieval_pendulum_frozen_negative_control"),
     }
 
 
