@@ -956,7 +956,9 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "the total angular momentum, momentum and energy balance under three laws, and what the hub's "
         "attitude does. Part I checks the reel as a dynamical system: a drum in uniform gravity "
         "against the closed form, the energy balance with a brake and friction, and the tension law's "
-        "closed-loop modes against the roots of its characteristic polynomial (docs/deployment.md 10-11).",
+        "closed-loop modes against the roots of its characteristic polynomial (docs/deployment.md 10-11). "
+        "Part M gates the spool's limits on the motor's torque and the pay-out speed (10.4), part N the "
+        "constant-speed retrieval against the rigid-rod reeled pendulum within a derived budget (14.1).",
         "",
         "**What the numbers mean.** 'over bound' is the measured error divided by its budget "
         "(docs/deployment.md 8; references/gates.toml gives each budget and its source): below 1 passes. "
@@ -965,7 +967,9 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "gate, as it must). The peers' fixed-segment scaling l0 = L/N conserves neither momentum nor "
         "energy; on the hub, the exit flux's moment dropped breaks the angular momentum and the "
         "centripetal term dropped the momentum and energy; the strain rate without the l' term brakes the deployment; a kernel ignoring the law "
-        "leaves A l unconserved. The birth remap (B) has no control: it is Python (deployment.birth_state), "
+        "leaves A l unconserved and the retrieval 87 deg off the pendulum; the spool limits' three defects "
+        "(the unlimited command or no brake in the balance, the limit's upper corner dropped) each fail the "
+        "limits' gates they reach. The birth remap (B) has no control: it is Python (deployment.birth_state), "
         "which no defect of the kernel reaches.",
         "",
         table(rows),
