@@ -53,7 +53,18 @@ K. A YES2-like two-stage deployment (studies/reel_yes2.py): the tension law in s
    the commanded length in a figure.
 L. Retrieval of 5 km to 100 m (studies/reel_retrieval.py, docs/deployment.md 14): at constant speed
    (the growing libration) and under the tension law in stages (held); no gate here (the
-   comparison with the rigid-rod pendulum and its control are tests: tests/test_reel_stages.py).
+   comparison with the rigid-rod pendulum is part N).
+M. The spool limits (studies/reel_limits.py, docs/deployment.md 10.4): a drum in uniform gravity under
+   the tension law with its motor's torque limited and a regulating brake on the speed, both
+   limits pressed: the torque bound, the speed bound from the balance at the fastest point, the
+   balance the outputs report (to round-off) and the energy balance (10.3). Controls: the unlimited
+   command in the balance (DEFECT_SPOOL_TORQUE_UNLIMITED), the brake out of it
+   (DEFECT_SPOOL_NO_SPEED_BRAKE), the limit's upper corner dropped (DEFECT_SPOOL_TORQUE_ONE_SIDED).
+N. Part L's constant-speed retrieval against the reeled pendulum (tetherlab/oracles/reeled_pendulum.py)
+   while l >= 500 m, at every output within a budget derived term by term (docs/deployment.md 14.1:
+   the field's P3 term, the line's inertia, its sag, its strain, each through the linearised
+   pendulum's response, plus twice the run's difference from the same run at a tenth of its rtol).
+   Control: a kernel that ignores the law (DEFECT_REEL_FROZEN).
 
     PYTHONPATH=. python studies/deployment.py OUTDIR [--quiet]
 """
@@ -426,7 +437,7 @@ def part_retrieval():
 
 
 def part_spool():
-    """G: the spool's three gates and their two controls (docs/deployment.md 11)."""
+    """I: the spool's three gates and their two controls (docs/deployment.md 11)."""
     from studies import reel_laws as RL
     from tetherlab.model.params import DEFECT_SPOOL_UNCOUPLED, DEFECT_TENSION_K2_SIGN
 
@@ -446,23 +457,23 @@ def part_spool():
     ec_err = float(np.abs(ec_total - ec_total[0]).max()) if ec_total is not None else math.inf
     trun, om = RL.tension_run()
     if not trun.ok:
-        raise RuntimeError(f"part G: the tension-law run failed: {trun.message}")
+        raise RuntimeError(f"part I: the tension-law run failed: {trun.message}")
     tm = RL.tension_measure(trun, om)
     tctrl, _ = RL.tension_run(DEFECT_TENSION_K2_SIGN)
     tc = RL.tension_measure(tctrl, om) if tctrl.ok else {"worst": math.inf}
     roots = ", ".join(f"{z.real:.4f}{z.imag:+.4f}i" for z in tm["roots"])
     rows = [
-        {"case": "G drum in uniform gravity max |L - l_oracle| over its budget", "value": d_err, "bound": d_budget,
+        {"case": "I drum in uniform gravity max |L - l_oracle| over its budget", "value": d_err, "bound": d_budget,
          "over bound": d_err / d_budget, "unit": "m",
          "note": f"{float(drum.reel['deployed_length_m'].iloc[-1]):.1f} m out after 10 s"},
         {"case": "control L'' coupling dropped: the same", "value": dc_err, "bound": d_budget,
          "over bound": dc_err / d_budget, "unit": "m", "note": "must exceed the bound"},
-        {"case": "G energy with brake and friction, max |E + K_s + W_b + W_loss - (0)|", "value": e_err,
+        {"case": "I energy with brake and friction, max |E + K_s + W_b + W_loss - (0)|", "value": e_err,
          "bound": e_bound, "over bound": e_err / e_bound, "unit": "J",
          "note": f"brake and friction took {float(erun.reel['brake_work_J'].iloc[-1]):.0f} J"},
         {"case": "control L'' coupling dropped: the same", "value": ec_err, "bound": e_bound,
          "over bound": ec_err / e_bound, "unit": "J", "note": "must exceed the bound"},
-        {"case": "G tension law: worst relative error of the modes against the roots", "value": tm["worst"],
+        {"case": "I tension law: worst relative error of the modes against the roots", "value": tm["worst"],
          "bound": tm["budget"], "over bound": tm["worst"] / tm["budget"], "unit": "1",
          "note": f"k1 = 4, k2 = 1; roots {roots} (units of Omega)"},
         {"case": "control k2 sign flipped: the same", "value": tc["worst"], "bound": tm["budget"],
@@ -481,15 +492,15 @@ def part_spool():
 
 
 def part_seds():
-    """H: the SEDS-like deployment to the end of its line (no gate)."""
+    """J: the SEDS-like deployment to the end of its line (no gate)."""
     from studies import reel_laws as RL
 
     run = simulate_reel(RL.seds_scene(), progress=False, raise_on_failure=False)
     if run.stopped_by != "reel.main.spent":
-        raise RuntimeError(f"part H: the deployment did not reach the end of its line: {run.message}")
+        raise RuntimeError(f"part J: the deployment did not reach the end of its line: {run.message}")
     prof = RL.seds_profile(run)
     births = sum(c["change"] == "birth" for c in run.changes)
-    rows = [{"case": "H SEDS-like: end of deployment (20 km)", "value": float(prof["t"][-1] / 60.0), "unit": "min",
+    rows = [{"case": "J SEDS-like: end of deployment (20 km)", "value": float(prof["t"][-1] / 60.0), "unit": "min",
              "note": f"swing angle {math.degrees(prof['theta'][-1]):.1f} deg, speed {prof['v'][-1]:.1f} m/s, "
                      f"tension {prof['T'][-1]:.3f} N at the end; {births} births; no gate"}]  # fmt: skip
     return rows, {}, prof
@@ -525,6 +536,95 @@ def part_retrieval_law():
              "unit": "deg", "note": f"L {pr['L'][-1]:.0f} m at {pr['t'][-1] / 60:.0f} min; no gate"}
             for name, pr in (("constant speed 1 m/s", out["constant"]), ("tension law in stages", out["tension"]))]  # fmt: skip
     return rows, {}, out
+
+
+def part_limits():
+    """M: the spool limits' four gates (docs/deployment.md 10.4) on studies/reel_limits.py's run,
+    and their three controls, each against the gates its defect must fail."""
+    from studies import reel_limits as RLIM
+    from tetherlab.model.params import (DEFECT_SPOOL_NO_SPEED_BRAKE, DEFECT_SPOOL_TORQUE_ONE_SIDED,
+                                        DEFECT_SPOOL_TORQUE_UNLIMITED)
+
+    m = RLIM.limits_measure(RLIM.limits_run())
+    on_torque, on_speed = int((m["active"] == 1).sum()), int((m["active"] == 3).sum())
+    if not m["ok"] or on_torque < 50 or on_speed < 50 or m["speed"] <= RLIM.LIMITS["max_speed"]:
+        # a run that does not press on both limits leaves the gates idle: not a pass
+        raise RuntimeError(f"part M: the limited drum must run ok and press on both limits, got ok={m['ok']}, "
+                           f"{on_torque} outputs on the torque limit, {on_speed} on the speed limit, "
+                           f"max |L'| {m['speed']:.3f} m/s")
+
+    def ratios(x):
+        return {"torque": x["torque"] / x["torque_budget"], "speed": x["speed"] / x["speed_budget"],
+                "balance": x["residual"] / x["residual_budget"], "energy": x["energy_drift"] / x["energy_budget"]}
+
+    def control(defect):
+        run = RLIM.limits_run(defect)
+        if not run.ok:  # a refusal shows no gate's teeth (verify's RAISED): the control gate then fails
+            return None
+        return ratios(RLIM.limits_measure(run))
+
+    nominal = ratios(m)
+    ctrls = {"unlimited": (control(DEFECT_SPOOL_TORQUE_UNLIMITED), ("balance", "energy")),
+             "no_speed_brake": (control(DEFECT_SPOOL_NO_SPEED_BRAKE), ("speed", "balance", "energy")),
+             "one_sided": (control(DEFECT_SPOOL_TORQUE_ONE_SIDED), ("torque",))}  # fmt: skip
+    units = {"torque": "N m", "speed": "m/s", "balance": "N", "energy": "J"}
+    values = {"torque": (m["torque"], m["torque_budget"]), "speed": (m["speed"], m["speed_budget"]),
+              "balance": (m["residual"], m["residual_budget"]), "energy": (m["energy_drift"], m["energy_budget"])}
+    notes = {"torque": f"command up to {m['torque_command']:.1f} N m; {on_torque} of {len(m['t'])} outputs on the limit",
+             "speed": f"v_max {RLIM.LIMITS['max_speed']} m/s; {on_speed} outputs on the limit",
+             "balance": "m_s L'' = T - j - tau/R - F_f - F_v with the applied limits",
+             "energy": f"(10.3); the motor and the brake took {m['brake_work']:.0f} J"}  # fmt: skip
+    rows = []
+    for k, (v, b) in values.items():
+        rows.append({"case": f"M limits: {k} over its bound", "value": v, "bound": b, "over bound": v / b,
+                     "unit": units[k], "note": notes[k]})
+    gates = {"deployment_limits_torque_over_budget": nominal["torque"],
+             "deployment_limits_speed_over_budget": nominal["speed"],
+             "deployment_limits_balance_over_bound": nominal["balance"],
+             "deployment_limits_energy_over_bound": nominal["energy"]}  # fmt: skip
+    gate_of = {"unlimited": "deployment_limits_torque_unlimited_negative_control",
+               "no_speed_brake": "deployment_limits_no_speed_brake_negative_control",
+               "one_sided": "deployment_limits_one_sided_negative_control"}
+    for name, (r, must) in ctrls.items():
+        weakest = 0.0 if r is None else min(r[k] for k in must)
+        gates[gate_of[name]] = 1.0 / weakest if weakest > 0 else math.inf
+        got = "the run refused" if r is None else ", ".join(f"{k} {r[k]:.3g}x" for k in must)
+        rows.append({"case": f"control {name.replace('_', ' ')}: weakest of {', '.join(must)} over bound",
+                     "value": weakest, "bound": 1.0, "over bound": weakest, "unit": "1",
+                     "note": f"must exceed 1: {got}"})
+    return rows, gates, m
+
+
+def part_retrieval_pendulum():
+    """N: the constant-speed retrieval of part L against the reeled pendulum, with the budget
+    derived term by term (docs/deployment.md 14.1), and the frozen law as its control."""
+    from studies import reel_retrieval as R
+
+    run = simulate_reel(R.retrieval_scene(), progress=False, raise_on_failure=False)
+    fine = simulate_reel(R.fine_scene(), progress=False, raise_on_failure=False)
+    if not (run.ok and fine.ok):
+        raise RuntimeError(f"part N: the retrieval failed: {run.message} / {fine.message}")
+    m = R.pendulum_measure(run, fine)
+    if m["oracle_max"] < math.radians(80.0):  # the instability must be inside the window
+        raise RuntimeError(f"part N: the pendulum's angle reaches {math.degrees(m['oracle_max']):.1f} deg only")
+    ctrl = simulate_reel(R.retrieval_scene(), progress=False, defect=DEFECT_REEL_FROZEN, raise_on_failure=False)
+    # a refused control run shows no teeth: its gate then fails
+    c_ratio = R.pendulum_measure(ctrl, None)["ratio"] if ctrl.ok else 0.0
+    i = m["worst"]
+    parts = ", ".join(f"{k} {math.degrees(v[i]):.3f}" for k, v in m["terms"].items())
+    j = len(m["t"]) - 1
+    rows = [
+        {"case": "N retrieval vs reeled pendulum: worst |theta - theta_p| / budget(t)", "value": m["ratio"],
+         "bound": 1.0, "over bound": m["ratio"], "unit": "1",
+         "note": f"at t = {m['t'][i]:.0f} s: {math.degrees(m['err'][i]):.3f} deg against {math.degrees(m['budget'][i]):.3f} "
+                 f"({parts} deg); at l = {R.WINDOW_M:g} m: {math.degrees(m['err'][j]):.3f} against "
+                 f"{math.degrees(m['budget'][j]):.3f} deg; the pendulum reaches {math.degrees(m['oracle_max']):.1f} deg"},
+        {"case": "control frozen law: the same", "value": c_ratio, "bound": 1.0, "over bound": c_ratio, "unit": "1",
+         "note": "must exceed 1"},
+    ]  # fmt: skip
+    gates = {"deployment_retrieval_pendulum_over_budget": m["ratio"],
+             "deployment_retrieval_pendulum_frozen_negative_control": 1.0 / c_ratio if c_ratio > 0 else math.inf}
+    return rows, gates, m
 
 
 def scene_figures(out: Path, yes2: dict | None, retr: dict | None) -> list[str]:
@@ -583,8 +683,8 @@ def scene_figures(out: Path, yes2: dict | None, retr: dict | None) -> list[str]:
 
 
 def spool_figures(out: Path, spool: dict | None, seds: dict | None = None) -> list[str]:
-    """The drum against its oracle and the tension law's perturbation decaying (part G); the
-    SEDS-like swing angle and tension profile (part H)."""
+    """The drum against its oracle and the tension law's perturbation decaying (part I); the
+    SEDS-like swing angle and tension profile (part J)."""
     if spool is None and seds is None:
         return []
     import matplotlib
@@ -856,7 +956,9 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "the total angular momentum, momentum and energy balance under three laws, and what the hub's "
         "attitude does. Part I checks the reel as a dynamical system: a drum in uniform gravity "
         "against the closed form, the energy balance with a brake and friction, and the tension law's "
-        "closed-loop modes against the roots of its characteristic polynomial (docs/deployment.md 10-11).",
+        "closed-loop modes against the roots of its characteristic polynomial (docs/deployment.md 10-11). "
+        "Part M gates the spool's limits on the motor's torque and the pay-out speed (10.4), part N the "
+        "constant-speed retrieval against the rigid-rod reeled pendulum within a derived budget (14.1).",
         "",
         "**What the numbers mean.** 'over bound' is the measured error divided by its budget "
         "(docs/deployment.md 8; references/gates.toml gives each budget and its source): below 1 passes. "
@@ -865,7 +967,9 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "gate, as it must). The peers' fixed-segment scaling l0 = L/N conserves neither momentum nor "
         "energy; on the hub, the exit flux's moment dropped breaks the angular momentum and the "
         "centripetal term dropped the momentum and energy; the strain rate without the l' term brakes the deployment; a kernel ignoring the law "
-        "leaves A l unconserved. The birth remap (B) has no control: it is Python (deployment.birth_state), "
+        "leaves A l unconserved and the retrieval 87 deg off the pendulum; the spool limits' three defects "
+        "(the unlimited command or no brake in the balance, the limit's upper corner dropped) each fail the "
+        "limits' gates they reach. The birth remap (B) has no control: it is Python (deployment.birth_state), "
         "which no defect of the kernel reaches.",
         "",
         table(rows),
@@ -881,7 +985,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir", type=Path)
     ap.add_argument("--quiet", action="store_true")
-    ap.add_argument("--parts", default="ABCDEFGHIJKL", help="parts to run (A and C run together)")
+    ap.add_argument("--parts", default="ABCDEFGHIJKLMN", help="parts to run (A and C run together)")
     args = ap.parse_args(argv)
     out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
@@ -908,7 +1012,8 @@ def main(argv=None) -> int:
         run_part("A+C", part_free)
     for name, part in (("B", lambda: (*part_birth(), None)), ("D", part_retire), ("E", part_exponential),
                        ("F", part_retrieval), ("G", part_convergence), ("H", part_hub), ("I", part_spool),
-                       ("J", part_seds), ("K", part_yes2), ("L", part_retrieval_law)):  # fmt: skip
+                       ("J", part_seds), ("K", part_yes2), ("L", part_retrieval_law), ("M", part_limits),
+                       ("N", part_retrieval_pendulum)):  # fmt: skip
         if name in args.parts:
             run_part(name, part)
     free = found.get("A+C")

@@ -76,5 +76,12 @@ def test_every_gate_has_a_probe_or_a_reason_to_have_none():
                 # and the spool's two (part I)
                 "deployment_spool_drum_over_budget", "deployment_spool_energy_over_bound",
                 "deployment_tension_roots_over_budget", "deployment_spool_uncoupled_negative_control",
-                "deployment_tension_k2_negative_control"}
+                "deployment_tension_k2_negative_control",
+                # and the spool limits' three (part M)
+                "deployment_limits_torque_over_budget", "deployment_limits_speed_over_budget",
+                "deployment_limits_balance_over_bound", "deployment_limits_energy_over_bound",
+                "deployment_limits_torque_unlimited_negative_control",
+                "deployment_limits_no_speed_brake_negative_control", "deployment_limits_one_sided_negative_control",
+                # and the retrieval against the reeled pendulum (part N)
+                "deployment_retrieval_pendulum_over_budget", "deployment_retrieval_pendulum_frozen_negative_control"}
     assert not (gates - probed - set(verify.TOOTHLESS) - credited), "gates neither probed nor explained"

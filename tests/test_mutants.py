@@ -89,12 +89,21 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
              ("deployment_frozen_negative_control", "reel_law_frozen", "deployment_retrieval_invariant"),
              ("deployment_hub_exit_torque_negative_control", "reel_hub_exit_torque_dropped",
               "deployment_hub_angular_momentum_over_bound"),
-             ("deployment_hub_ring_negative_control", "reel_hub_ring_dropped", "deployment_hub_axis_spin_over_bound"))
+             ("deployment_hub_ring_negative_control", "reel_hub_ring_dropped", "deployment_hub_axis_spin_over_bound"),
+             ("deployment_limits_torque_unlimited_negative_control", "spool_torque_unlimited",
+              "deployment_limits_energy_over_bound"),
+             ("deployment_limits_no_speed_brake_negative_control", "spool_no_speed_brake",
+              "deployment_limits_speed_over_budget"),
+             ("deployment_limits_one_sided_negative_control", "spool_torque_one_sided",
+              "deployment_limits_torque_over_budget"),
+             ("deployment_retrieval_pendulum_frozen_negative_control", "reel_law_frozen",
+              "deployment_retrieval_pendulum_over_budget"))
     for ctrl_gate, defect, gate in pairs:
         assert ParamView(_reel_params(defect)).defect == getattr(L, "DEFECT_" + {
             "reel_rescaled": "REEL_RESCALED", "reel_strain_rate_without_ldot": "REEL_NO_LDOT",
             "reel_law_frozen": "REEL_FROZEN", "reel_hub_exit_torque_dropped": "REEL_NO_EXIT_TORQUE",
-            "reel_hub_ring_dropped": "REEL_NO_RING"}[defect])
+            "reel_hub_ring_dropped": "REEL_NO_RING", "spool_torque_unlimited": "SPOOL_TORQUE_UNLIMITED",
+            "spool_no_speed_brake": "SPOOL_NO_SPEED_BRAKE", "spool_torque_one_sided": "SPOOL_TORQUE_ONE_SIDED"}[defect])
         thr = GATES[ctrl_gate]["threshold"]
         for ctrl, expect in ((0.5 * thr, True), (2.0 * thr, False), (None, False)):
             by_defect, _by_gate, _ = verify.mutation_summary({}, GATES, {ctrl_gate: ctrl})
@@ -155,3 +164,31 @@ def test_the_harness_fills_the_matrix_for_a_fast_pair():
     # the other defects were not run here, so they count as uncaught
     assert vals["mutation_uncaught_defects"] == len(mutants.names()) - 1
     assert "de421_fit_error" in verify.matrix_md(cells, GATES, by_defect, by_gate)
+
+
+def test_a_probe_that_raises_catches_the_defect_but_gives_no_gate_teeth(monkeypatch):
+    # verify.run_negative_controls: a probe that refuses to run under a defect marks its cells
+    # "raised" (RAISED in the matrix); mutation_summary counts the defect caught and credits no gate
+    from tetherlab import ephemeris
+    from tetherlab.verify import controls
+
+    def probe(rows):
+        if ephemeris.DEGREE == 5:  # the defect de421_low_degree is on
+            raise ValueError("deliberate refusal")
+        return {"de421_fit_error": 0.0}
+
+    monkeypatch.setattr(controls, "PROBES", [("fake", probe, {"de421"})])
+    monkeypatch.setitem(controls._PROBE_GATES, "fake", ["de421_fit_error"])
+    rows = []
+    cells, baseline = controls.run_negative_controls(rows, GATES, names=["de421_low_degree"])
+    assert baseline == {"de421_fit_error": 0.0}
+    assert cells == {("de421_low_degree", "de421_fit_error"): (None, controls.RAISED)}
+    assert any("deliberate refusal" in r.get("error", "") for r in rows)
+    by_defect, by_gate, _ = verify.mutation_summary(cells, GATES, {})
+    assert by_defect["de421_low_degree"] == ["de421_fit_error (raised)"]
+    assert by_gate["de421_fit_error"] == []
+    assert "RAISED" in verify.matrix_md(cells, GATES, by_defect, by_gate)
+    # a measured failure, by contrast, gives the gate its teeth
+    cells = {("de421_low_degree", "de421_fit_error"): (1e9, "caught")}
+    _by_defect, by_gate, _ = verify.mutation_summary(cells, GATES, {})
+    assert by_gate["de421_fit_error"] == ["de421_low_degree"]

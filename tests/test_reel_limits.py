@@ -14,7 +14,11 @@ import numpy as np
 import pytest
 
 from tetherlab.errors import SceneError
-from tetherlab.model.params import DEFECT_SPOOL_NO_SPEED_BRAKE, DEFECT_SPOOL_TORQUE_UNLIMITED
+from tetherlab.model.params import (
+    DEFECT_SPOOL_NO_SPEED_BRAKE,
+    DEFECT_SPOOL_TORQUE_ONE_SIDED,
+    DEFECT_SPOOL_TORQUE_UNLIMITED,
+)
 from tetherlab.scene import Scene
 
 from .helpers import import_study
@@ -78,6 +82,16 @@ def test_brake_left_out_of_the_balance_fails_the_speed_bound():
     m = _STUDY.limits_measure(_STUDY.limits_run(DEFECT_SPOOL_NO_SPEED_BRAKE))
     assert m["speed"] > m["speed_budget"] + 1.0, (m["speed"], m["speed_budget"])
     assert m["energy_drift"] > 100.0 * m["energy_budget"], (m["energy_drift"], m["energy_budget"])
+
+
+def test_one_sided_torque_limit_fails_the_torque_bound_alone():
+    """The upper corner dropped (DEFECT_SPOOL_TORQUE_ONE_SIDED): the applied torque follows the
+    command above tau_max (measured 55 N m against 32.2), while the balance and the energy, which
+    carry the same torque, still close: only the torque bound sees it."""
+    m = _STUDY.limits_measure(_STUDY.limits_run(DEFECT_SPOOL_TORQUE_ONE_SIDED))
+    assert m["ok"]
+    assert m["torque"] > 1.5 * m["torque_budget"], (m["torque"], m["torque_budget"])
+    assert m["residual"] <= m["residual_budget"] and m["energy_drift"] <= m["energy_budget"]
 
 
 def test_scene_round_trip_keeps_the_limits():

@@ -5,9 +5,10 @@ with and without it (docs/deployment.md 14).
   through the scene's dictionary;
 * the staged command is the law's formula with the stage's l_c at every output (the switch ends a
   phase and writes l_c for the next one);
-* the constant-speed retrieval's in-plane angle against the rigid-rod variable-length pendulum, and
-  a kernel ignoring the law (DEFECT_REEL_FROZEN) failing the same budget
-  (tetherlab/oracles/reeled_pendulum.py).
+* the constant-speed retrieval's in-plane angle against the rigid-rod variable-length pendulum
+  (tetherlab/oracles/reeled_pendulum.py) within the budget of docs/deployment.md 14.1, a kernel
+  ignoring the law (DEFECT_REEL_FROZEN) failing it, and the budget's linearised response checked
+  against a perturbed pendulum.
 """
 
 from __future__ import annotations
@@ -110,38 +111,58 @@ def test_staged_retrieval_reaches_the_last_stage(staged):
     assert np.abs(pr["theta"]).max() < math.radians(20.0)
 
 
+@pytest.mark.slow
 def test_uniform_retrieval_against_the_rigid_rod_pendulum():
-    """The constant-speed retrieval (1 m/s, 5 km -> 100 m) against theta'' = -(I'/I)(theta' + Omega)
-    - 3 Omega^2 sin theta cos theta, I = (m* + rho l/3) l^2, while l >= 500 m (the angle reaches
-    87 deg there; below, it passes 100 deg and the line swings through: outside both models).  Budget, relative to the largest
-    angle: the line's flexibility, of the order of its mass ratio rho l/m* (0.010 at 5 km; the
-    rigid-rod term takes its mean effect), the field beyond the gravity gradient 4 l/a (0.003,
-    docs/deployment.md 7), the strain eps (2e-4).  A stated estimate, not a derived bound.
-    Measured: 0.44 deg against 1.15 deg (2 s once compiled)."""
-    err, budget, oracle = _pendulum_error(simulate_reel(_STUDY.retrieval_scene(), progress=False))
-    assert err <= budget, (math.degrees(err), math.degrees(budget))
-    assert np.abs(oracle).max() > math.radians(80.0)  # the instability is in the window (87 deg at 500 m)
+    """The constant-speed retrieval (1 m/s, 5 km -> 100 m) against the reeled pendulum while
+    l >= 500 m (the angle reaches 87 deg there; below, the line swings through: outside both
+    models), at every output within the budget derived in docs/deployment.md 14.1 (make verify
+    part N). Measured: worst 0.25 of the budget; 0.44 deg against 2.7 deg at 500 m (~10 s once
+    compiled: the run and its rtol/10 twin)."""
+    m = _STUDY.pendulum_measure(simulate_reel(_STUDY.retrieval_scene(), progress=False),
+                                simulate_reel(_STUDY.fine_scene(), progress=False))
+    assert m["ratio"] <= 1.0, (m["ratio"], m["t"][m["worst"]])
+    assert m["oracle_max"] > math.radians(80.0)  # the instability is in the window
+    assert m["terms"]["integration"][-1] > 0.0  # the twin run was compared, not skipped
 
 
 def test_frozen_law_fails_the_pendulum_comparison():
     """Negative control: a kernel that ignores the law (DEFECT_REEL_FROZEN) keeps the line at
-    5 km, its angle near 0 against the pendulum's 87 deg: 87 deg off, 60 times its budget (1.44 deg: the frozen line's strain is larger)."""
+    5 km, its angle near 0 against the pendulum's 87 deg: 30 times the derived budget (without the
+    integrator's term, which only widens it)."""
     run = simulate_reel(_STUDY.retrieval_scene(), progress=False, defect=DEFECT_REEL_FROZEN, raise_on_failure=False)
-    err, budget, _ = _pendulum_error(run)
-    assert err > 10.0 * budget, (math.degrees(err), math.degrees(budget))
+    m = _STUDY.pendulum_measure(run)
+    assert m["ratio"] > 10.0, m["ratio"]
 
 
-def _pendulum_error(run):
-    """(max |theta - theta_pendulum| over l >= 500 m of the law's length, its budget, the oracle)."""
+def test_pendulum_sensitivity_predicts_a_perturbed_pendulum():
+    """The budget's linearised response: the pendulum with a small constant push f of theta''
+    moves by int G(t, tau) f dtau, the transition matrix's prediction, to second order in f."""
+    from tetherlab.oracles.reeled_pendulum import libration, libration_sensitivity
+
     c = _STUDY.RETRIEVAL
-    pr = _STUDY.profile(run)
-    pr["L"] = c["L0"] - c["v"] * pr["t"]  # the law's length: a frozen kernel's table says the same
-    keep = pr["L"] >= 500.0
-    theta = pr["theta"][keep]
-    oracle = _STUDY.oracle_angle(pr["t"][keep])
-    eps = float(np.abs(pr["T"][keep]).max()) / c["EA"]
-    budget = (c["rho"] * c["L0"] / _STUDY.reduced_mass() + 4.0 * c["L0"] / c["a"] + eps) * float(np.abs(oracle).max())
-    return float(np.abs(theta - oracle).max()), budget, oracle
+    om, ms = _STUDY.omega(), _STUDY.reduced_mass()
+    t = np.linspace(0.0, 3000.0, 1501)
+    length, rate = (lambda x: c["L0"] - c["v"] * x), (lambda x: -c["v"])
+    s = libration_sensitivity(t, length, rate, omega_rad_s=om, mstar_kg=ms, rho_kg_m=c["rho"])
+    f = 1e-3 * om**2
+
+    def pushed(x, y):  # the pendulum's rhs with the push, integrated independently of the matrix
+        from scipy.integrate import solve_ivp
+
+        def rhs(tt, yy):
+            l, ld = length(tt), rate(tt)
+            inertia = (ms + c["rho"] * l / 3.0) * l * l
+            g = 2.0 * ld / l + c["rho"] * ld * l * l / (3.0 * inertia)
+            return [yy[1], -g * (yy[1] + om) - 3.0 * om**2 * math.sin(yy[0]) * math.cos(yy[0]) + f]
+
+        return solve_ivp(rhs, (x[0], x[-1]), y, method="DOP853", t_eval=x, rtol=1e-11, atol=1e-14).y[0]
+
+    moved = pushed(t, [0.0, 0.0]) - libration(t, length, rate, omega_rad_s=om, mstar_kg=ms, rho_kg_m=c["rho"])
+    inv = np.linalg.inv(s["phi"])
+    dt = t[1] - t[0]
+    pred = np.array([np.trapezoid(inv[: i + 1, :, 1] @ s["phi"][i, 0, :], dx=dt) * f if i else 0.0
+                     for i in range(len(t))])
+    assert np.abs(moved - pred).max() <= 0.02 * np.abs(moved).max(), (np.abs(moved - pred).max(), np.abs(moved).max())
 
 
 @pytest.mark.slow

@@ -22,8 +22,8 @@ How a defect is switched on, and why it can never reach a user's run:
 The rigid-body defects (attachment vector not rotated, omega x (omega x r) dropped)
 are run by studies/rigid_bodies.py itself (no cheap probe exercises a rigid body); verify credits
 them from that study's control gate, as it credits eq. 20 from the hard cases' control.  The reel's
-defects (fixed-segment scaling, strain rate without l', law ignored) are run likewise by
-studies/deployment.py and credited from its control gates.
+defects (fixed-segment scaling, strain rate without l', law ignored, the spool's and its limits')
+are run likewise by studies/deployment.py and credited from its control gates.
 
 Use (verification only)::
 
@@ -329,7 +329,8 @@ MUTANTS = {
             "the kernel ignores the reel's law: the rod at the reel keeps its length",
             "tether/reel.py (p[H_MUTANT] = DEFECT_REEL_FROZEN)",
             "docs/deployment.md 7c (the libration's action, an adiabatic invariant)",
-            ("deployment_retrieval_invariant", "deployment_frozen_negative_control"),
+            ("deployment_retrieval_invariant", "deployment_frozen_negative_control",
+             "deployment_retrieval_pendulum_over_budget", "deployment_retrieval_pendulum_frozen_negative_control"),
             mutate=_flag(L.DEFECT_REEL_FROZEN),
             path="reel",
         ),
@@ -388,6 +389,37 @@ MUTANTS = {
             "docs/deployment.md 11.3 (the characteristic polynomial)",
             ("deployment_tension_roots_over_budget", "deployment_tension_k2_negative_control"),
             mutate=_flag(L.DEFECT_TENSION_K2_SIGN),
+            path="reel",
+        ),
+        # -- the spool limits' defects (docs/deployment.md 10.4): run by studies/deployment.py part M
+        # beside the limited drum of studies/reel_limits.py and credited from its control gates.
+        Mutant(
+            "spool_torque_unlimited",
+            "the spool's balance with the motor's unlimited command while its outputs report the limited torque",
+            "tether/reel_spool.py spool_forces (p[H_MUTANT] = DEFECT_SPOOL_TORQUE_UNLIMITED)",
+            "docs/deployment.md 10.4 (the limited torque is in F_b, so (10.2) and (10.3) hold with it)",
+            ("deployment_limits_balance_over_bound", "deployment_limits_energy_over_bound",
+             "deployment_limits_torque_unlimited_negative_control"),
+            mutate=_flag(L.DEFECT_SPOOL_TORQUE_UNLIMITED),
+            path="reel",
+        ),
+        Mutant(
+            "spool_no_speed_brake",
+            "the spool's balance without the regulating brake's force F_v while its outputs report it",
+            "tether/reel_spool.py spool_forces (p[H_MUTANT] = DEFECT_SPOOL_NO_SPEED_BRAKE)",
+            "docs/deployment.md 10.4 (the speed bound from the balance at the largest |L'|)",
+            ("deployment_limits_speed_over_budget", "deployment_limits_balance_over_bound",
+             "deployment_limits_energy_over_bound", "deployment_limits_no_speed_brake_negative_control"),
+            mutate=_flag(L.DEFECT_SPOOL_NO_SPEED_BRAKE),
+            path="reel",
+        ),
+        Mutant(
+            "spool_torque_one_sided",
+            "the motor's torque limit with its upper corner dropped: the command bent above -tau_max only",
+            "tether/reel_spool.py spool_forces (p[H_MUTANT] = DEFECT_SPOOL_TORQUE_ONE_SIDED)",
+            "docs/deployment.md 10.4 (|tau| <= tau_max + w e^(-2 tau_max/w) from both corners)",
+            ("deployment_limits_torque_over_budget", "deployment_limits_one_sided_negative_control"),
+            mutate=_flag(L.DEFECT_SPOOL_TORQUE_ONE_SIDED),
             path="reel",
         ),
     )

@@ -213,7 +213,9 @@ class Document:
                 "Each deliberate defect of `tetherlab/mutants.py` is switched on alone and the cheap probes of the "
                 "gates on its code path are run (a probe is the gate's own measurement on fewer cases; see "
                 "`tetherlab/verify/controls.py`, `PROBES`). **CAUGHT** = the gate fails under the defect while it passes "
-                "without it; *missed* = the gate passes anyway; · = the defect's code is not on that gate's path. "
+                "without it; *missed* = the gate passes anyway; RAISED = the probe refused to run under the defect (the "
+                "defect counts as caught, but no gate of that probe earns teeth by it); · = the defect's code is not "
+                "on that gate's path. "
                 f"Score: {score} defects caught.", "", self.matrix_md, "",
                 "### The defects", "",
                 table([{"defect": m.name, "what is wrong": m.defect, "where the switch is": m.where,

@@ -40,6 +40,7 @@ DEFECT_SPOOL_UNCOUPLED = 28       # the spool's L'' solved with the exit tension
 DEFECT_TENSION_K2_SIGN = 29       # the tension law with the sign of its rate gain k2 flipped (tether/reel_spool.py)
 DEFECT_SPOOL_TORQUE_UNLIMITED = 30  # the spool's balance with the motor's unlimited torque, its outputs with the limited one (tether/reel_spool.py)
 DEFECT_SPOOL_NO_SPEED_BRAKE = 31    # the spool's balance without the regulating brake, its outputs with it (tether/reel_spool.py)
+DEFECT_SPOOL_TORQUE_ONE_SIDED = 45  # the motor's torque limit with its upper corner dropped: bent above -tau_max only (tether/reel_spool.py)
 DEFECT_INEXT_NO_VSQ = 41          # the inextensible rod's constraint without |d'|^2 in kappa (tether/inextensible.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL

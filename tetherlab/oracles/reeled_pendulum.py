@@ -40,3 +40,37 @@ def libration(t_s: np.ndarray, length, rate, *, omega_rad_s: float, mstar_kg: fl
     if not sol.success:
         raise RuntimeError(f"reeled pendulum: {sol.message}")
     return sol.y[0]
+
+
+def libration_sensitivity(t_s: np.ndarray, length, rate, *, omega_rad_s: float, mstar_kg: float,
+                          rho_kg_m: float = 0.0, rtol: float = 1e-11) -> dict:
+    """The reeled pendulum from rest at the vertical with its variational equation: theta, theta',
+    theta'' and the state transition matrix Phi(t) of (dtheta, dtheta') at the times t_s.
+
+    Linearised about the solution, a perturbation f(t) of theta'' moves theta by
+    int_0^t G(t, tau) f(tau) dtau, G(t, tau) = [Phi(t) Phi(tau)^-1]_(0,1) (docs/deployment.md 14.1)."""
+
+    def parts(t, th, w):
+        l = length(t)
+        ld = rate(t)
+        inertia = (mstar_kg + rho_kg_m * l / 3.0) * l * l
+        growth = 2.0 * ld / l + rho_kg_m * ld * l * l / (3.0 * inertia)
+        acc = -growth * (w + omega_rad_s) - 3.0 * omega_rad_s**2 * math.sin(th) * math.cos(th)
+        return growth, acc
+
+    def rhs(t, y):
+        th, w = y[0], y[1]
+        growth, acc = parts(t, th, w)
+        a = np.array([[0.0, 1.0], [-3.0 * omega_rad_s**2 * math.cos(2.0 * th), -growth]])
+        phi = y[2:].reshape(2, 2)
+        return np.concatenate(([w, acc], (a @ phi).ravel()))
+
+    t_s = np.asarray(t_s, float)
+    y0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 1.0])
+    sol = solve_ivp(rhs, (t_s[0], t_s[-1]), y0, method="DOP853", t_eval=t_s, rtol=rtol, atol=rtol * 1e-3)
+    if not sol.success:
+        raise RuntimeError(f"reeled pendulum: {sol.message}")
+    th, w = sol.y[0], sol.y[1]
+    growth, acc = np.array([parts(t, a, b) for t, a, b in zip(t_s, th, w)]).T
+    return {"theta": th, "dtheta": w, "ddtheta": acc, "growth": growth,
+            "phi": sol.y[2:].T.reshape(-1, 2, 2)}  # fmt: skip

@@ -35,6 +35,7 @@ import numpy as np
 from .._jit import njit
 from ..kernel.layout import (
     DEFECT_SPOOL_NO_SPEED_BRAKE,
+    DEFECT_SPOOL_TORQUE_ONE_SIDED,
     DEFECT_SPOOL_TORQUE_UNLIMITED,
     DEFECT_SPOOL_UNCOUPLED,
     DEFECT_TENSION_K2_SIGN,
@@ -180,7 +181,10 @@ def spool_forces(p, i, L, Ld, eps):
         p[rs + RS_QCMD] = p[rb + RL_TAU]
     tau = p[rs + RS_QCMD]
     if p[rb + RL_QMAX] > 0.0:  # the scene asks for a drum radius with a torque limit
-        tau = limited_torque(tau, p[rb + RL_QMAX], p[rb + RL_QW])
+        if int(p[H_MUTANT]) == DEFECT_SPOOL_TORQUE_ONE_SIDED:
+            tau = -p[rb + RL_QMAX] + _softplus(tau + p[rb + RL_QMAX], p[rb + RL_QW])
+        else:
+            tau = limited_torque(tau, p[rb + RL_QMAX], p[rb + RL_QW])
         tau_r = tau / R
     p[rs + RS_TAU] = tau
     fv = 0.0

@@ -121,6 +121,10 @@ TOOTHLESS = {
     "inextensible_drift_control": "a control itself: the stabilisation switched off must drift beyond the bound",
     "inextensible_drift_orbit_control": "a control itself: the 35-day run with the stabilisation switched off must "
     "drift beyond the bound",
+    "inextensible_rigid_chain": "probed, but no registered defect gives it teeth: the one on its path that moves "
+    "the chain (inextensible_centripetal_dropped) makes the probe refuse to run (the frequency fit finds one zero "
+    "crossing: RAISED, the defect caught but no gate credited), and the Baumgarte rate set to 0 "
+    "(inextensible_unstabilised) leaves the frequencies at 7.9e-12 (the drift gates catch it)",
     "inextensible_energy": "not probed: the drift gate catches the unstabilised constraint, and a defect of the "
     "distributed forces keeps them conservative",
     "inextensible_ea_slope": "not probed (8 elastic RADAU5 runs): the slope measures the elastic model's limit, "
@@ -133,9 +137,12 @@ TOOTHLESS = {
 def run_negative_controls(rows_out, gates: dict, names=None, probes=None):
     """Each active defect (tetherlab.mutants) against every probe on its code path.
 
-    Returns (cells, baseline, log): cells[(defect, gate)] = (value, "caught" / "missed");
+    Returns (cells, baseline): cells[(defect, gate)] = (value, "caught" / "missed" / "raised");
     baseline[gate] = the probe's value with no defect (a probe that fails with no defect cannot
-    claim a catch).  ``names``/``probes`` restrict the run (tests)."""
+    claim a catch).  "raised": the probe refused to run under the defect.  The defect is caught
+    (a run that refuses is not silent garbage), but the refusal says nothing of what any one of
+    the probe's gates measures, so it gives none of them teeth (mutation_summary).
+    ``names``/``probes`` restrict the run (tests)."""
     from .. import mutants
 
     names = mutants.names() if names is None else names
@@ -161,9 +168,12 @@ def run_negative_controls(rows_out, gates: dict, names=None, probes=None):
             try:
                 with mutants.active(name):
                     vals = fn([])
-            except Exception as exc:  # a measurement that refuses to run under the defect fails it
-                vals = {g: math.inf for g in _probe_gates(pname, baseline)}
-                rows_out.append({"defect": name, "probe": pname, "error": f"{type(exc).__name__}: {exc}"[:200]})
+            except Exception as exc:  # the probe refused to run under the defect: see the docstring
+                for g in _probe_gates(pname, baseline):
+                    cells[name, g] = (None, RAISED)
+                rows_out.append({"defect": name, "probe": pname, "error": f"{type(exc).__name__}: {exc}"[:200],
+                                 "wall (s)": time.perf_counter() - t0})
+                continue
             for g, v in vals.items():
                 thr = gates.get(g, {}).get("threshold", math.inf)
                 base_ok = not mutants.caught(baseline.get(g), thr)
@@ -171,6 +181,10 @@ def run_negative_controls(rows_out, gates: dict, names=None, probes=None):
             rows_out.append({"defect": name, "probe": pname, "wall (s)": time.perf_counter() - t0})
     rows_out.append({"defect": "(all)", "probe": "total", "wall (s)": time.perf_counter() - t_all})
     return cells, baseline
+
+
+#: the verdict of a cell whose probe raised under the defect
+RAISED = "raised"
 
 
 def _probe_gates(pname, baseline):
@@ -201,6 +215,8 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         if verdict == "caught":
             by_defect.setdefault(d, []).append(g)
             by_gate.setdefault(g, []).append(d)
+        elif verdict == RAISED:  # the defect is caught (the run refused), but no gate earns teeth by it
+            by_defect.setdefault(d, []).append(f"{g} (raised)")
     # the hard-cases study runs eq. 20 as printed itself (its control gate must pass = it was seen)
     ctrl = study_values.get("hard_cases_negative_control")
     if ctrl is not None and ctrl <= gates["hard_cases_negative_control"]["threshold"]:
@@ -232,6 +248,8 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         ("deployment_no_ldot_negative_control", "reel_strain_rate_without_ldot",
          ("deployment_exponential_angle_over_budget", "deployment_exponential_tension_over_budget")),
         ("deployment_frozen_negative_control", "reel_law_frozen", ("deployment_retrieval_invariant",)),
+        ("deployment_retrieval_pendulum_frozen_negative_control", "reel_law_frozen",
+         ("deployment_retrieval_pendulum_over_budget",)),
         # (the remap is Python: deployment.retire_state's P-only correction, run by the study itself)
         ("deployment_retirement_linear_only_negative_control", "retire_remap_linear_only",
          ("deployment_retirement_angmom_over_bound",)),
@@ -243,6 +261,13 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         ("deployment_spool_uncoupled_negative_control", "spool_uncoupled",
          ("deployment_spool_drum_over_budget", "deployment_spool_energy_over_bound")),
         ("deployment_tension_k2_negative_control", "tension_k2_flipped", ("deployment_tension_roots_over_budget",)),
+        ("deployment_limits_torque_unlimited_negative_control", "spool_torque_unlimited",
+         ("deployment_limits_balance_over_bound", "deployment_limits_energy_over_bound")),
+        ("deployment_limits_no_speed_brake_negative_control", "spool_no_speed_brake",
+         ("deployment_limits_speed_over_budget", "deployment_limits_balance_over_bound",
+          "deployment_limits_energy_over_bound")),
+        ("deployment_limits_one_sided_negative_control", "spool_torque_one_sided",
+         ("deployment_limits_torque_over_budget",)),
     ):  # fmt: skip
         ctrl = study_values.get(ctrl_gate)
         if ctrl is not None and ctrl <= gates[ctrl_gate]["threshold"]:
@@ -270,6 +295,8 @@ def matrix_md(cells, gates: dict, by_defect, by_gate) -> str:
                 row.append("CAUGHT (study)" if name in by_gate.get(g, []) else "·")
             elif v[1] == "caught":
                 row.append(f"**CAUGHT** {_fmt(v[0])}")
+            elif v[1] == RAISED:
+                row.append("RAISED")
             elif v[1].startswith("skipped"):
                 row.append("skipped")
             else:

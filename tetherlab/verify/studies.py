@@ -187,6 +187,17 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_tension_roots_over_budget": g.get("deployment_tension_roots_over_budget"),
         "deployment_spool_uncoupled_negative_control": g.get("deployment_spool_uncoupled_negative_control"),
         "deployment_tension_k2_negative_control": g.get("deployment_tension_k2_negative_control"),
+        # part M: the spool limits (studies/reel_limits.py, docs/deployment.md 10.4)
+        "deployment_limits_torque_over_budget": g.get("deployment_limits_torque_over_budget"),
+        "deployment_limits_speed_over_budget": g.get("deployment_limits_speed_over_budget"),
+        "deployment_limits_balance_over_bound": g.get("deployment_limits_balance_over_bound"),
+        "deployment_limits_energy_over_bound": g.get("deployment_limits_energy_over_bound"),
+        "deployment_limits_torque_unlimited_negative_control": g.get("deployment_limits_torque_unlimited_negative_control"),
+        "deployment_limits_no_speed_brake_negative_control": g.get("deployment_limits_no_speed_brake_negative_control"),
+        "deployment_limits_one_sided_negative_control": g.get("deployment_limits_one_sided_negative_control"),
+        # part N: the retrieval against the reeled pendulum (studies/reel_retrieval.py, docs/deployment.md 14.1)
+        "deployment_retrieval_pendulum_over_budget": g.get("deployment_retrieval_pendulum_over_budget"),
+        "deployment_retrieval_pendulum_frozen_negative_control": g.get("deployment_retrieval_pendulum_frozen_negative_control"),
     }
 
 
