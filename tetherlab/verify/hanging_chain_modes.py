@@ -193,21 +193,35 @@ def convergence_table(ns=NS, models=MODELS) -> list[dict]:
 ORDER_NS = (64, 128, 256)
 
 
-def check_hanging_chain_modes(rows_out, models=MODELS) -> dict:
+def check_hanging_chain_modes(rows_out, ns=NS, models=MODELS) -> dict:
     """hanging_chain_bessel_order: max |p - 2| of the observed order between n = 128 and 256;
     hanging_chain_bessel_n64: max |e(64) 64^2 / c - 1|, c the derived leading coefficient; over
-    modes 1 and 2 and both models (references/gates.toml)."""
-    rows = convergence_table(ORDER_NS, models)
+    modes 1 and 2 and both models (references/gates.toml).  ``ns``: the table's rod counts (they
+    must hold ORDER_NS)."""
+    if list(ns) != sorted(ns) or tuple(ns[-2:]) != ORDER_NS[1:] or ORDER_NS[0] not in ns:
+        raise ValueError(f"ns: expected ascending rod counts holding {ORDER_NS}, got {ns}")
+    rows = convergence_table(ns, models)
     dev_p = dev_c = 0.0
     for r in rows:
         rows_out.append({"case": f"{r['model']}, mode {r['mode']}, n = {r['n']} (eigen-route)", "w (rad/s)": r["omega_rad_s"],
                          "w/w_Bessel - 1": r["w/w_Bessel - 1"], "error (stretch offset removed)": r["error"],
                          "error n^2 / c - 1": r["error n^2"] / r["derived c"] - 1.0, "order from n/2": r["order"]})  # fmt: skip
-        if r["n"] == ORDER_NS[-1]:
+        if r["n"] == ORDER_NS[-1]:  # the order from ORDER_NS[1]: ns double up to it
             dev_p = max(dev_p, abs(r["order"] - 2.0)) if math.isfinite(r["order"]) else math.inf
         if r["n"] == ORDER_NS[0]:
             dev_c = max(dev_c, abs(r["error n^2"] / r["derived c"] - 1.0))
     return {"hanging_chain_bessel_order": dev_p, "hanging_chain_bessel_n64": dev_c}
+
+
+def figures(out) -> list:
+    """[("hanging-chain", [the figure's path relative to ``out``])]: the table n = 4 ... 256 drawn
+    (verify's figures task; the report shows it in the hanging-chain-bessel section)."""
+    from pathlib import Path
+
+    path = Path(out) / "hanging_chain_bessel.png"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure(convergence_table(), path)
+    return [("hanging-chain", [path.relative_to(out)])]
 
 
 def figure(rows, path) -> None:
@@ -218,18 +232,21 @@ def figure(rows, path) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
-    for model, marker in (("paper", "o"), ("inextensible", "s")):
-        for mode, color in ((1, "C0"), (2, "C1")):
-            sel = [r for r in rows if r["model"] == model and r["mode"] == mode]
-            n = np.array([r["n"] for r in sel], float)
-            ax.loglog(n, np.abs([r["error"] for r in sel]), marker, color=color, mfc="none" if model == "paper" else color,
-                      label=f"{'elastic' if model == 'paper' else model}, mode {mode}")  # fmt: skip
-            if model == "paper":
-                ax.loglog(n, sel[0]["derived c"] / n**2, "-", color=color, lw=0.8, label=f"c / n$^2$, mode {mode} (derived)")
+    for mode, color in ((1, "C0"), (2, "C1")):
+        el = [r for r in rows if r["model"] == "paper" and r["mode"] == mode]
+        inx = [r for r in rows if r["model"] == "inextensible" and r["mode"] == mode]
+        n = np.array([r["n"] for r in el], float)
+        ax.loglog(n, el[0]["derived c"] / n**2, "-", color=color, lw=0.8, label=f"c / n$^2$, mode {mode} (derived)")
+        ax.loglog(n, np.abs([r["error"] for r in el]), "o", color=color, mfc="none", ms=9,
+                  label=f"elastic, mode {mode}, stretch offset removed")
+        ax.loglog([r["n"] for r in inx], np.abs([r["error"] for r in inx]), "s", color=color, ms=4,
+                  label=f"inextensible, mode {mode}")
+        ax.loglog(n, np.abs([r["w/w_Bessel - 1"] for r in el]), "x", color=color, ms=6,
+                  label=f"elastic, mode {mode}, as computed (with the offset)")
     ax.set_xlabel("rods n")
-    ax.set_ylabel("|w / w_Bessel - 1| (elastic: stretch offset removed)")
+    ax.set_ylabel("|w / w_Bessel - 1|")
     ax.set_title("Hanging chain with a tip mass: lateral modes, eigen-route")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     ax.grid(True, which="both", lw=0.3)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
