@@ -134,6 +134,12 @@ def test_gates_fail_under_a_first_order_defect():
         assert clean[gate] <= thr < bad[gate], (gate, clean[gate], bad[gate])
 
 
+@pytest.mark.slow  # the whole table: 1.6 s with one BLAS thread, 14 s with the default threads on a loaded machine
+def test_figure_for_the_report(tmp_path):
+    (name, files), = H.figures(tmp_path)
+    assert name == "hanging-chain" and files[0].suffix == ".png" and (tmp_path / files[0]).stat().st_size > 10_000
+
+
 def test_table_needs_the_gates_rod_counts():
     with pytest.raises(ValueError, match="ns: expected ascending rod counts"):
         H.check_hanging_chain_modes([], ns=(4, 8))
