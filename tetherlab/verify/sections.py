@@ -33,7 +33,7 @@ CHECKS = [
     ("stiefel-data", "Stiefel-Scheifele references: data check (references/stiefel)", check_stiefel_reference),
     ("reproducible", "Reproducibility", check_reproducible),
 ]
-#: figures shown in the section of the gate they belong to: the section 4.3 scenes', and the hanging
+#: figures shown in the section of the gate they belong to: the section 4.3 scenes, and the hanging
 #: chain's errors against the rod count (verify/hanging_chain_modes.py)
 FIGURE_SECTION = {"libration-inplane": "libration", "libration-outofplane": "libration",
                   "lateral-two-rods": "lateral", "vertical-equilibrium": "vertical",
