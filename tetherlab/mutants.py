@@ -93,6 +93,15 @@ def _unstabilised(p):
     rods.constraint_rate_1_s[:] = 0.0
 
 
+def _rod_mass_off_by_one(p):
+    # every rod of a tether given m / (n + 1) in place of m / n: nodes counted for rods
+    v = ParamView(p)
+    masses = v.rods.mass_kg
+    for t in v.tethers:
+        n, g0 = int(t.n_rods), int(t.rod0)
+        masses[g0 : g0 + n] *= n / (n + 1.0)
+
+
 def _j2_sign(p):
     from .forces import zonal
 
@@ -174,7 +183,7 @@ MUTANTS = {
             "tether/rod.py rod_force (tether model code MODEL_PRINTED)",
             "docs/model.md 2.4 (misprint 1): the moment equation eq. 10 needs sqrt3",
             ("angular_momentum_internal", "lateral_mode_two_rods", "hard_cases_negative_control",
-             "hanging_chain_lateral_modes"),
+             "hanging_chain_lateral_modes", "hanging_chain_bessel_n64"),
             mutate=_printed,
             path="tether",
         ),
@@ -183,7 +192,7 @@ MUTANTS = {
             "eq. 19 read with the corrected J_2: 2 F_T* and J_2 (T_B - T_A) both kept (F_T* twice)",
             "tether/rod.py rod_force (p[H_MUTANT] = MUT_EQ19_DOUBLED)",
             "docs/model.md 2.4 (misprint 2): reaction moment (2 sqrt3 - 1)/sqrt3 of eq. 10",
-            ("angular_momentum_internal", "lateral_mode_two_rods"),
+            ("angular_momentum_internal", "lateral_mode_two_rods", "hanging_chain_bessel_n64"),
             mutate=_flag(L.MUT_EQ19_DOUBLED),
             path="tether",
         ),
@@ -203,6 +212,16 @@ MUTANTS = {
             "docs/model.md 3 (quadrature): 2 nodes a half are exact for the linear gravity gradient's moment",
             ("libration_inplane_frequency", "libration_outofplane_frequency"),
             mutate=_one_node,
+            path="tether",
+        ),
+        Mutant(
+            "rod_mass_off_by_one",
+            "each rod of an n-rod tether given m / (n + 1) in place of m / n (the tether short of one rod's mass: "
+            "an O(1/n) error)",
+            "the rod records' mass_kg (RT_M), as system.build_model writes them",
+            "docs/hanging-chain.md 5-7: the rods' frequencies converge to the continuum's as n^-2",
+            ("hanging_chain_bessel_order", "hanging_chain_bessel_n64"),
+            mutate=_rod_mass_off_by_one,
             path="tether",
         ),
         Mutant(

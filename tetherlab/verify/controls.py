@@ -17,6 +17,7 @@ from .checks import (
     check_libration,
     check_stiefel_probe,
 )
+from .hanging_chain_modes import ORDER_NS, check_hanging_chain_modes
 from .inextensible import check_inextensible
 from .studies import check_catenary_probe
 
@@ -27,6 +28,7 @@ PROBES = [
     ("lateral", lambda rows: check_lateral_mode(rows, kinds=("paper", "energy")), {"tether", "integrator"}),
     ("catenary", lambda rows: check_catenary_probe(rows), {"tether", "statics"}),
     ("hanging_chain", lambda rows: check_hanging_chain(rows, ns=(8,), models=("paper",)), {"tether", "integrator"}),
+    ("hanging_chain_bessel", lambda rows: check_hanging_chain_modes(rows, ns=ORDER_NS), {"tether", "inextensible"}),
     ("inextensible", lambda rows: check_inextensible(rows, quick=True), {"tether", "integrator", "inextensible"}),
     ("heyoka_orbits", lambda rows: check_heyoka_orbits(rows), {"gravity", "integrator"}),
     ("stiefel", lambda rows: check_stiefel_probe(rows), {"gravity", "moon", "integrator", "dromo"}),
@@ -197,6 +199,7 @@ _PROBE_GATES = {
     "lateral": ["lateral_mode_two_rods"],
     "catenary": ["catenary_shape_n64", "catenary_tension_n64", "catenary_order_deviation"],
     "hanging_chain": ["hanging_chain_lateral_modes"],
+    "hanging_chain_bessel": ["hanging_chain_bessel_order", "hanging_chain_bessel_n64"],
     "inextensible": ["inextensible_rigid_chain", "inextensible_drift", "inextensible_drift_orbit", "inextensible_libration"],
     "heyoka_orbits": ["heyoka_orbits_position"],
     "stiefel": ["stiefel_cowell_best_error", "stiefel_dromo_best_error", "stiefel_example1_te_error"],

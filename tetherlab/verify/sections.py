@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .hanging_chain_modes import check_hanging_chain_modes
 from .inextensible import check_inextensible
 from .checks import (
     check_de421,
@@ -23,6 +24,8 @@ CHECKS = [
     ("invariants", "Invariants: angular momentum, energy, power balance (docs/model.md 6)", check_invariants),
     ("lateral", "Two-rod lateral mode (docs/model.md 9)", check_lateral_mode),
     ("hanging-chain", "Hanging chain with a tip mass: lateral modes (docs/hanging-chain.md)", check_hanging_chain),
+    ("hanging-chain-bessel", "Hanging chain against Bessel: lateral modes 1 and 2, n = 4 ... 256, both models, by the "
+     "linearised eigenproblem (docs/hanging-chain.md 5-7)", check_hanging_chain_modes),
     ("inextensible", "The inextensible tether model (docs/inextensible.md)", check_inextensible),
     ("gravity", "Gravity effects against heyoka (references/heyoka_orbits)", check_heyoka_orbits),
     ("de421", "DE421 Chebyshev fit (tetherlab/ephemeris.py)", check_de421),
@@ -30,9 +33,11 @@ CHECKS = [
     ("stiefel-data", "Stiefel-Scheifele references: data check (references/stiefel)", check_stiefel_reference),
     ("reproducible", "Reproducibility", check_reproducible),
 ]
-#: figures of the section 4.3 scenes shown in the section of the gate they belong to
+#: figures shown in the section of the gate they belong to: the section 4.3 scenes, and the hanging
+#: chain's errors against the rod count (verify/hanging_chain_modes.py)
 FIGURE_SECTION = {"libration-inplane": "libration", "libration-outofplane": "libration",
-                  "lateral-two-rods": "lateral", "vertical-equilibrium": "vertical"}
+                  "lateral-two-rods": "lateral", "vertical-equilibrium": "vertical",
+                  "hanging-chain": "hanging-chain-bessel"}
 
 
 def gate_section(gid: str) -> str:
@@ -60,6 +65,7 @@ _GATES_OF = {
     "invariants": ("angular_momentum_internal", "energy_model_energy", "energy_model_power_balance"),
     "lateral": ("lateral_mode_two_rods",),
     "hanging-chain": ("hanging_chain_lateral_modes",),
+    "hanging-chain-bessel": ("hanging_chain_bessel_order", "hanging_chain_bessel_n64"),
     "inextensible": ("inextensible_rigid_chain", "inextensible_bessel_order", "inextensible_drift",
                      "inextensible_drift_control", "inextensible_drift_orbit", "inextensible_drift_orbit_control", "inextensible_energy", "inextensible_ea_slope",
                      "inextensible_libration"),
