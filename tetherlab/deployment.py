@@ -185,13 +185,15 @@ def quasi_static_offset(y, lay, g0: int, l_m: float, la_m: float, l2_m: float, s
 
 
 def quasi_static_birth_state(model_old, model_new, y: np.ndarray, k: int, l_m: float, la_m: float, l2_m: float,
-                             speed_m_s: float, t_s: float) -> tuple[np.ndarray, dict]:
+                             speed_m_s: float, t_s: float, rho_kg_m: float,
+                             restore_momenta: bool = True) -> tuple[np.ndarray, dict]:
     """The birth of :func:`birth_state` with the new joint moved by :func:`quasi_static_offset`
     (placed on the line's quasi-static shape, so that it does not ring), then the centre of mass,
     momentum and angular momentum of before restored by the least change of kinetic energy
     (tetherlab/momentum_remap.py; docs/deployment.md 6.4).  Returns (state, info) with the
-    offsets applied; a tether of one rod (no next joint) is cut straight."""
-    from .momentum_remap import centre_of_mass, momenta, restore
+    offsets applied; a tether of one rod (no next joint) is cut straight.  ``restore_momenta=False``:
+    the joint moved and nothing restored (the negative control of the momentum test)."""
+    from .momentum_remap import _roots, centre_of_mass, momenta, restore
 
     lay_old, lay_new = model_old.state, model_new.state
     g0 = model_old.rod_slices[k].start
@@ -204,10 +206,21 @@ def quasi_static_birth_state(model_old, model_new, y: np.ndarray, k: int, l_m: f
     z[lay_new.rod(g0 + 1)] -= delta / k2
     z[lay_new.rod_rate(g0)] += ddelta / k2
     z[lay_new.rod_rate(g0 + 1)] -= ddelta / k2
+    if not restore_momenta:
+        return z, {"delta_m": delta, "delta_rate_m_s": ddelta}
+    # The two rods' material moved by the affine fields xi delta and (1 - xi) delta: their centre
+    # of mass by delta/2 each, the system's by (m_a + m_b) delta / (2 M).  That shift is taken
+    # back exactly, from the masses, not from the momentum columns: on an orbit those give the
+    # centre of mass to ~1e-5 m only (H ~ r x P, differences of 1e13), which is ~0.1 J of
+    # potential energy in the central field (docs/deployment.md 6.4)
+    c_old, mass = centre_of_mass(model_old, t_s, y)
+    shift = -rho_kg_m * l_m * delta / (2.0 * mass)
+    for b in _roots(model_new):
+        z[lay_new.root_position(b)] += shift
     before = momenta(model_old, t_s, y[None, :])[0]
-    c_old, _ = centre_of_mass(model_old, t_s, y)
-    z, info = restore(model_new, t_s, z, before, c_old)
-    info["delta_m"], info["delta_rate_m_s"] = delta, ddelta
+    z, info = restore(model_new, t_s, z, before, c_old, translate=False)
+    info["mass_kg"] = mass
+    info["delta_m"], info["delta_rate_m_s"], info["shift_m"] = delta, ddelta, shift
     return z, info
 
 
@@ -533,7 +546,8 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
             if nxt[1] == "birth" and reel.birth == "quasi-static":
                 k = [x.name for x in prep.model.tethers].index(t.name)
                 y, _ = quasi_static_birth_state(prep.model, nxt_prep.model, y_end, k, l_first,
-                                                l_first - reel.rod_length_m, reel.rod_length_m, speed, t_b)
+                                                l_first - reel.rod_length_m, reel.rod_length_m, speed, t_b,
+                                                t.mass_kg / t.length_m)
             elif nxt[1] == "birth":
                 y = birth_state(lay_old, lay_new, y_end, g0, l_first, l_first - reel.rod_length_m, speed)
             else:

@@ -67,14 +67,17 @@ def _roots(model) -> list[int]:
 
 
 def restore(model, t_s: float, y: np.ndarray, target: np.ndarray, c_target: np.ndarray,
-            passes: int = 2) -> tuple[np.ndarray, dict]:
+            passes: int = 2, translate: bool = True) -> tuple[np.ndarray, dict]:
     """The state y (of ``model`` at ``t_s``) with its centre of mass put back at ``c_target`` (a
     translation of every position: the remap moved material, not the system) and the rigid
     velocity increment that brings its momentum to target[:3] and its angular momentum to
     target[3:] (about the origin; with the centre of mass and the momentum both restored, the
     angular momentum about the centre of mass is restored too).  Returns (state, {"a", "omega",
     "shift_m", "c", "mass_kg"}).  ValueError on non-finite momenta or a rigid increment that
-    changes nothing (no mass)."""
+    changes nothing (no mass).  ``translate=False``: the caller has put the centre of mass back
+    itself (exactly, from the masses) and ``c_target`` is only the centre of the rotation: on an
+    orbit the centre of mass found from the momentum columns carries ~1e-5 m of round-off (H ~ r x P
+    ~ 1e13), which each translation would turn into ~0.1 J of potential energy."""
     from .system import point_positions
 
     target = np.asarray(target, float)
@@ -83,10 +86,13 @@ def restore(model, t_s: float, y: np.ndarray, target: np.ndarray, c_target: np.n
     info = {"a": np.zeros(3), "omega": np.zeros(3), "shift_m": np.zeros(3)}
     lay = model.state
     for _ in range(passes):
-        c, mass = centre_of_mass(model, t_s, z)
-        for b in _roots(model):  # every position hangs from a root's through the rods' d
-            z[lay.root_position(b)] += c_target - c
-        info["shift_m"] = info["shift_m"] + (c_target - c)
+        if translate:
+            c, mass = centre_of_mass(model, t_s, z)
+            for b in _roots(model):  # every position hangs from a root's through the rods' d
+                z[lay.root_position(b)] += c_target - c
+            info["shift_m"] = info["shift_m"] + (c_target - c)
+        else:
+            c, mass = c_target, float("nan")
         base = momenta(model, t_s, z[None, :])[0]
         pos = point_positions(model, z)["bodies"]
         cols = [rigid_increment(model, z, e, np.zeros(3), c_target, pos) for e in np.eye(3)]
