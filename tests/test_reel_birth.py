@@ -53,19 +53,16 @@ def bent_birth():
     the line bent (rods 0 and 1 rotated sideways) and moving (the first rod bending and stretching)."""
     scene = _quasi_scene()
     first = prepare(scene)
-    lay = first.model.state
     old = prepare(scene, reel_phase={"first": first, "rods": {"main": (3, 200.0)}})
     new = prepare(scene, reel_phase={"first": first, "rods": {"main": (4, 200.0)}})
     lo = old.model.state
-    y = np.zeros(lo.size)
-    y[lo.q][: 3 + 9] = 0.0
+    y = np.zeros(lo.size)  # the station at rest at the origin
     # the chords of 100, 50, 50 m (strain 1e-3) bent by 0.1 rad and -0.05 rad in the x-y plane
     for g, (l, ang) in enumerate(((100.0, 0.1), (50.0, -0.05), (50.0, 0.0))):
         y[lo.rod(g)] = l * 1.001 * np.array([math.cos(ang), math.sin(ang), 0.0]) / (2 * SQ3)
     y[lo.rod_rate(0)] = np.array([2.0, 0.6, 0.05]) / (2 * SQ3)  # pay-out and a sideways swing
     y[lo.rod_rate(1)] = np.array([0.0, 0.3, -0.02]) / (2 * SQ3)
     y[lo.rod_rate(2)] = np.array([0.0, 0.5, 0.0]) / (2 * SQ3)
-    del lay
     return old, new, y
 
 

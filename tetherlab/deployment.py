@@ -4,7 +4,8 @@ A reel's first rod varies in length (tether/reel.py).  When it grows past the re
 a new rod is born at the reel; when it shrinks below the retirement bound it is merged into the
 next.  Either ends a phase: the run's segment loop (pipeline.run_segments) stops at that time,
 the state is remapped through the model's StateLayout into the layout of the next rod count
-(:func:`birth_state`, :func:`retire_state`; docs/deployment.md 6) and the next phase starts
+(:func:`birth_state`, or :func:`quasi_static_birth_state` with ``reel.birth = "quasi-static"``;
+:func:`retire_state`; docs/deployment.md 6) and the next phase starts
 from it.  The laws are prescribed, so the times of births and retirements are known before a
 phase starts (:func:`next_change`).
 
