@@ -7,7 +7,9 @@ ways, every count summed over the phases:
    a fresh initial step and RADAU5's workspace rebuilt, as at a birth);
 2. where the steps fall inside a phase: each phase integrated as four quarters, steps per quarter;
 3. ``error_scale = "tether"`` against "rod": steps, and how far the end mass moves relative to the
-   station, at the end and over every output row.
+   station, at the end and over every output row;
+4. ``reel.birth = "quasi-static"`` against "straight" (docs/deployment.md 6.4), with either error
+   scale: steps, the largest energy jump at a birth, and the end mass's move at the end.
 
 Run: ``python -m studies.deployment_steps`` (~2 min on a loaded 2-core machine; not in make verify).
 """
@@ -100,6 +102,29 @@ def error_scales(rod_m: float = 500.0) -> dict:
             "max_move_m": float(np.linalg.norm(d, axis=1).max())}  # fmt: skip
 
 
+def births(rod_m: float = 500.0) -> dict:
+    """Per (error scale, birth): accepted steps, the largest |energy jump| at a birth (J), and the
+    end mass's position relative to the station at the end (m)."""
+    from tetherlab.benchmarks.deployment import _scene
+    from tetherlab.pipeline import simulate
+
+    out = {}
+    for scale in ("rod", "tether"):
+        for birth in ("straight", "quasi-static"):
+            r = simulate(_scene(rod_m, True, scale, birth), progress=False)
+            inv = r.invariants
+            e, ph = inv["energy_J"].to_numpy(), inv["phase"].to_numpy()
+            jumps = np.abs(np.diff(e))[np.diff(ph) != 0]
+            ts = r.phases[-1].timeseries
+            rel = ts[["mf.x_m", "mf.y_m", "mf.z_m"]].to_numpy()[-1] - ts[["m0.x_m", "m0.y_m", "m0.z_m"]].to_numpy()[-1]
+            out[(scale, birth)] = {"steps": sum(int(p.stats["n_accepted"]) for p in r.phases),
+                                   "max_energy_jump_J": float(jumps.max()) if jumps.size else 0.0, "end_rel_m": rel}  # fmt: skip
+    for scale in ("rod", "tether"):
+        d = out[(scale, "quasi-static")]["end_rel_m"] - out[(scale, "straight")]["end_rel_m"]
+        out[(scale, "quasi-static")]["end_move_m"] = float(np.linalg.norm(d))
+    return out
+
+
 def main() -> None:
     from tetherlab.benchmarks.deployment import _scene
     from tetherlab.pipeline import simulate
@@ -114,6 +139,9 @@ def main() -> None:
         print(f"  {ph:3d} {rods:3d} {q}")
     print("  summed over the phases but the first and last:", np.array([q for *_, q in rows[1:-1]]).sum(axis=0).tolist())
     print("error scale:", error_scales())
+    print("births: (error scale, birth) -> steps, largest energy jump at a birth, end move against straight")
+    for key, row in births().items():
+        print(f"  {key}: {row['steps']} steps, {row['max_energy_jump_J']:.3g} J, {row.get('end_move_m', 0.0):.3g} m")
 
 
 if __name__ == "__main__":

@@ -4,7 +4,8 @@ A reel's first rod varies in length (tether/reel.py).  When it grows past the re
 a new rod is born at the reel; when it shrinks below the retirement bound it is merged into the
 next.  Either ends a phase: the run's segment loop (pipeline.run_segments) stops at that time,
 the state is remapped through the model's StateLayout into the layout of the next rod count
-(:func:`birth_state`, :func:`retire_state`; docs/deployment.md 6) and the next phase starts
+(:func:`birth_state`, or :func:`quasi_static_birth_state` with ``reel.birth = "quasi-static"``;
+:func:`retire_state`; docs/deployment.md 6) and the next phase starts
 from it.  The laws are prescribed, so the times of births and retirements are known before a
 phase starts (:func:`next_change`).
 
@@ -163,6 +164,65 @@ def birth_state(lay_old, lay_new, y: np.ndarray, g0: int, l_m: float, la_m: floa
     d_a = f * d
     dd_a = f * dd + (1.0 - f) * lam * d
     return _with_rods(lay_old, lay_new, y, g0, 1, [(d_a, dd_a), (d - d_a, dd - dd_a)])
+
+
+def quasi_static_offset(y, lay, g0: int, l_m: float, la_m: float, l2_m: float, speed_m_s: float):
+    """(delta, delta') of the new joint of a birth from the straight cut (:func:`birth_state`) to
+    the line's quasi-static shape: the quadratic through the exit, the reel rod's far end B and
+    the next rod's far end C, in the unstretched coordinate s (A at 0, B at l, C at l + l2),
+    evaluated at the cut s = la; the same for the material velocity (v_A + w at the exit), each
+    taken perpendicular to the reel rod's chord (docs/deployment.md 6.4)."""
+    k2 = 2 * SQ3
+    D, Dd = k2 * y[lay.rod(g0)], k2 * y[lay.rod_rate(g0)]
+    D2, D2d = k2 * y[lay.rod(g0 + 1)], k2 * y[lay.rod_rate(g0 + 1)]
+    w = (speed_m_s / l_m) * D
+    # r(s) = A + s (B - A)/l + s (s - l) K, K the second divided difference of (A, B, C)
+    K = (D2 / l2_m - D / l_m) / (l_m + l2_m)
+    Kv = (D2d / l2_m - (Dd - w) / l_m) / (l_m + l2_m)
+    c = la_m * (la_m - l_m)
+    u = D / np.linalg.norm(D)
+    delta, ddelta = c * K, c * Kv
+    return delta - (delta @ u) * u, ddelta - (ddelta @ u) * u
+
+
+def quasi_static_birth_state(model_old, model_new, y: np.ndarray, k: int, l_m: float, la_m: float, l2_m: float,
+                             speed_m_s: float, t_s: float, rho_kg_m: float,
+                             restore_momenta: bool = True) -> tuple[np.ndarray, dict]:
+    """The birth of :func:`birth_state` with the new joint moved by :func:`quasi_static_offset`
+    (placed on the line's quasi-static shape, so that it does not ring), then the centre of mass,
+    momentum and angular momentum of before restored by the least change of kinetic energy
+    (tetherlab/momentum_remap.py; docs/deployment.md 6.4).  Returns (state, info) with the
+    offsets applied; a tether of one rod (no next joint) is cut straight.  ``restore_momenta=False``:
+    the joint moved and nothing restored (the negative control of the momentum test)."""
+    from .momentum_remap import _roots, centre_of_mass, momenta, restore
+
+    lay_old, lay_new = model_old.state, model_new.state
+    g0 = model_old.rod_slices[k].start
+    z = birth_state(lay_old, lay_new, y, g0, l_m, la_m, speed_m_s)
+    if model_old.rod_slices[k].stop - g0 < 2:
+        return z, {"delta_m": np.zeros(3), "delta_rate_m_s": np.zeros(3)}
+    delta, ddelta = quasi_static_offset(y, lay_old, g0, l_m, la_m, l2_m, speed_m_s)
+    k2 = 2 * SQ3
+    z[lay_new.rod(g0)] += delta / k2
+    z[lay_new.rod(g0 + 1)] -= delta / k2
+    z[lay_new.rod_rate(g0)] += ddelta / k2
+    z[lay_new.rod_rate(g0 + 1)] -= ddelta / k2
+    if not restore_momenta:
+        return z, {"delta_m": delta, "delta_rate_m_s": ddelta}
+    # The two rods' material moved by the affine fields xi delta and (1 - xi) delta: their centre
+    # of mass by delta/2 each, the system's by (m_a + m_b) delta / (2 M).  That shift is taken
+    # back exactly, from the masses, not from the momentum columns: on an orbit those give the
+    # centre of mass to ~1e-5 m only (H ~ r x P, differences of 1e13), which is ~0.1 J of
+    # potential energy in the central field (docs/deployment.md 6.4)
+    c_old, mass = centre_of_mass(model_old, t_s, y)
+    shift = -rho_kg_m * l_m * delta / (2.0 * mass)
+    for b in _roots(model_new):
+        z[lay_new.root_position(b)] += shift
+    before = momenta(model_old, t_s, y[None, :])[0]
+    z, info = restore(model_new, t_s, z, before, c_old, translate=False)
+    info["mass_kg"] = mass
+    info["delta_m"], info["delta_rate_m_s"], info["shift_m"] = delta, ddelta, shift
+    return z, info
 
 
 def retire_state(model_old, model_new, y: np.ndarray, k: int, rho_kg_m: float, la_m: float, lb_m: float,
@@ -484,7 +544,12 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
             nxt_prep = prepare(scene, reel_phase={"first": prep0, "rods": model_rods}, **opts)
             lay_new = nxt_prep.model.state
             y_end = res.y_end
-            if nxt[1] == "birth":
+            if nxt[1] == "birth" and reel.birth == "quasi-static":
+                k = [x.name for x in prep.model.tethers].index(t.name)
+                y, _ = quasi_static_birth_state(prep.model, nxt_prep.model, y_end, k, l_first,
+                                                l_first - reel.rod_length_m, reel.rod_length_m, speed, t_b,
+                                                t.mass_kg / t.length_m)
+            elif nxt[1] == "birth":
                 y = birth_state(lay_old, lay_new, y_end, g0, l_first, l_first - reel.rod_length_m, speed)
             else:
                 k = [x.name for x in prep.model.tethers].index(t.name)

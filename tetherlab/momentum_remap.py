@@ -39,19 +39,23 @@ def momenta(model, t_s: float, Y: np.ndarray) -> np.ndarray:
     return np.hstack([P, H])
 
 
-def rigid_increment(model, y: np.ndarray, a: np.ndarray, omega: np.ndarray, c: np.ndarray) -> np.ndarray:
+def rigid_increment(model, y: np.ndarray, a: np.ndarray, omega: np.ndarray, c: np.ndarray,
+                    pos: np.ndarray | None = None) -> np.ndarray:
     """y with the velocity increment a + omega x (r - c) of a rigid motion applied to every root
     body and, through the rod rates d' += omega x d, to every joint hanging from it (rigid
-    bodies keep their attitude states; their translation takes the increment)."""
-    from .system import point_positions
-
+    bodies keep their attitude states; their translation takes the increment).  ``pos``: the
+    bodies' positions of y (system.point_positions "bodies"), when the caller has them (the six
+    columns of one solve share them: the increment changes velocities only)."""
     lay = model.state
     z = np.array(y, float)
-    pos = point_positions(model, y)["bodies"]
+    if pos is None:
+        from .system import point_positions
+
+        pos = point_positions(model, y)["bodies"]
     for b in _roots(model):
         z[lay.root_velocity(b)] += a + np.cross(omega, pos[b, :3] - c)
-    for g in range(lay.n_rods):
-        z[lay.rod_rate(g)] += np.cross(omega, y[lay.rod(g)])
+    # every rod at once (the same products as one rod at a time)
+    z[lay.rods_dd] += np.cross(omega, y[lay.rods_d].reshape(-1, 3)).ravel()
     return z
 
 
@@ -63,30 +67,39 @@ def _roots(model) -> list[int]:
 
 
 def restore(model, t_s: float, y: np.ndarray, target: np.ndarray, c_target: np.ndarray,
-            passes: int = 2) -> tuple[np.ndarray, dict]:
+            passes: int = 2, translate: bool = True) -> tuple[np.ndarray, dict]:
     """The state y (of ``model`` at ``t_s``) with its centre of mass put back at ``c_target`` (a
     translation of every position: the remap moved material, not the system) and the rigid
     velocity increment that brings its momentum to target[:3] and its angular momentum to
     target[3:] (about the origin; with the centre of mass and the momentum both restored, the
     angular momentum about the centre of mass is restored too).  Returns (state, {"a", "omega",
     "shift_m", "c", "mass_kg"}).  ValueError on non-finite momenta or a rigid increment that
-    changes nothing (no mass)."""
+    changes nothing (no mass).  ``translate=False``: the caller has put the centre of mass back
+    itself (exactly, from the masses) and ``c_target`` is only the centre of the rotation: on an
+    orbit the centre of mass found from the momentum columns carries ~1e-5 m of round-off (H ~ r x P
+    ~ 1e13), which each translation would turn into ~0.1 J of potential energy."""
+    from .system import point_positions
+
     target = np.asarray(target, float)
     c_target = np.asarray(c_target, float)
     z = np.array(y, float)
     info = {"a": np.zeros(3), "omega": np.zeros(3), "shift_m": np.zeros(3)}
     lay = model.state
     for _ in range(passes):
-        c, mass = centre_of_mass(model, t_s, z)
-        for b in _roots(model):  # every position hangs from a root's through the rods' d
-            z[lay.root_position(b)] += c_target - c
-        info["shift_m"] = info["shift_m"] + (c_target - c)
+        if translate:
+            c, mass = centre_of_mass(model, t_s, z)
+            for b in _roots(model):  # every position hangs from a root's through the rods' d
+                z[lay.root_position(b)] += c_target - c
+            info["shift_m"] = info["shift_m"] + (c_target - c)
+        else:
+            c, mass = c_target, float("nan")
         base = momenta(model, t_s, z[None, :])[0]
-        cols = [rigid_increment(model, z, e, np.zeros(3), c_target) for e in np.eye(3)]
-        cols += [rigid_increment(model, z, np.zeros(3), e, c_target) for e in np.eye(3)]
+        pos = point_positions(model, z)["bodies"]
+        cols = [rigid_increment(model, z, e, np.zeros(3), c_target, pos) for e in np.eye(3)]
+        cols += [rigid_increment(model, z, np.zeros(3), e, c_target, pos) for e in np.eye(3)]
         A = (momenta(model, t_s, np.array(cols)) - base).T
         x = _solve(A, target - base)
-        z = rigid_increment(model, z, x[:3], x[3:], c_target)
+        z = rigid_increment(model, z, x[:3], x[3:], c_target, pos)
         info["a"] = info["a"] + x[:3]
         info["omega"] = info["omega"] + x[3:]
         info["c"] = c
@@ -112,8 +125,11 @@ def centre_of_mass(model, t_s: float, y: np.ndarray) -> tuple[np.ndarray, float]
     """(c, M) of the state's material from the response of its momenta to a translation of its
     velocity: dP/da = M I and dH/da = M [c x] (H about the origin), so c is the centre of mass
     of exactly the material the momenta count (bodies, stored tether, rods)."""
+    from .system import point_positions
+
     base = momenta(model, t_s, np.asarray(y, float)[None, :])[0]
-    units = [rigid_increment(model, y, e, np.zeros(3), np.zeros(3)) for e in np.eye(3)]
+    pos = point_positions(model, np.asarray(y, float))["bodies"]
+    units = [rigid_increment(model, y, e, np.zeros(3), np.zeros(3), pos) for e in np.eye(3)]
     rt = momenta(model, t_s, np.array(units)) - base
     if not (np.all(np.isfinite(base)) and np.all(np.isfinite(rt))):
         raise ValueError("momentum restore: expected a state with finite momenta; got a non-finite value")

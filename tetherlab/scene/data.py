@@ -202,6 +202,9 @@ class InitialShape:
 
 REEL_LAWS = ("constant", "exponential", "table", "spool", "tension")
 REEL_EXITS = ("canister", "drum")
+#: where a birth puts the new joint (docs/deployment.md 6.1, 6.4): on the straight rod it splits
+#: (every material point kept) or on the line's quasi-static shape (momenta kept, energy budgeted)
+REEL_BIRTHS = ("straight", "quasi-static")
 
 
 @dataclass(frozen=True)
@@ -229,6 +232,7 @@ class Reel:
     spool_radius_m: float = 0.0
     spool_axis: Vector3 | None = None  # unit; a canister's is its exit direction
     spool: "SpoolLaw | None" = None  # laws 'spool' and 'tension': L and L' are state (speed_m_s is L'(0))
+    birth: str = "straight"  # REEL_BIRTHS
 
 
 @dataclass(frozen=True)

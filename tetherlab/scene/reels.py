@@ -10,7 +10,7 @@ from typing import Any
 
 from ..errors import SceneError
 from ..units import ANGULAR_RATE, FORCE, LENGTH, MASS, MOMENT_OF_INERTIA, RATE, SPEED, TIME, TORQUE, Kind, shown
-from .data import REEL_EXITS, REEL_LAWS, Reel, SpoolLaw
+from .data import REEL_BIRTHS, REEL_EXITS, REEL_LAWS, Reel, SpoolLaw
 from .keys import _choice, _number, _quantity, _required, _table, _vector
 
 #: the spool laws' keys (docs/deployment.md 10, docs/scenes.md)
@@ -21,7 +21,7 @@ _TENSION_KEYS = ("reduced_mass", "orbit_rate", "commanded_length", "k1", "k2", "
 #: the keys of one entry of a tension law's `stages` (docs/deployment.md 10.6)
 _STAGE_KEYS = ("start", "commanded_length")
 _REEL_KEYS = ("at", "exit", "law", "speed", "rate", "times", "lengths", "rod_length", "birth_length", "retire_length",
-              "stored_length", "point", "exit_direction", "spool_radius", "spool_axis") + _SPOOL_KEYS + _TENSION_KEYS
+              "stored_length", "point", "exit_direction", "spool_radius", "spool_axis", "birth") + _SPOOL_KEYS + _TENSION_KEYS
 VISCOUS = Kind("N s / m", "a viscous friction coefficient (force per speed)", "20 N s/m")
 #: default v_s of the Coulomb friction's smooth sign tanh(L'/v_s): 1 cm/s, below any pay-out
 #: speed of interest and wide enough for the implicit integrators' Newton iteration
@@ -95,6 +95,7 @@ def parse_reel(value: Any, path: str, length_m: float) -> Reel:
             f"{birth:.6g} m with retire_length {retire:.6g} m and rod_length {rod:.6g} m",
         )
     stored = _quantity(table.get("stored_length", "0 m"), f"{path}.stored_length", LENGTH, nonnegative=True)
+    birth_kind = _choice(table.get("birth", "straight"), f"{path}.birth", REEL_BIRTHS)
     if length_m < retire:
         raise SceneError(
             f"{path}.retire_length", f"at most the deployed length ({length_m:.6g} m): at least one rod must be out",
@@ -102,7 +103,8 @@ def parse_reel(value: Any, path: str, length_m: float) -> Reel:
         )
     hub = _parse_hub(table, path, exit_)
     spool = _spool_law(table, path, law, exit_, length_m) if law in ("spool", "tension") else None
-    return Reel(law, exit_, speed, rate, rod, birth, retire, stored, times, lengths, spool=spool, **hub)
+    return Reel(law, exit_, speed, rate, rod, birth, retire, stored, times, lengths, spool=spool, birth=birth_kind,
+                **hub)
 
 
 def _unit_vector(raw, key: str) -> tuple:

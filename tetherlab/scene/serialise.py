@@ -201,6 +201,8 @@ def _scene_to_dict(scene: Scene) -> dict[str, Any]:
                     entry["reel"]["spool_radius"] = format_si(r.spool_radius_m, LENGTH)
                 if r.spool_axis is not None:
                     entry["reel"]["spool_axis"] = [float(x) for x in r.spool_axis]
+                if r.birth != "straight":  # the default reads back the same
+                    entry["reel"]["birth"] = r.birth
             # A default shape is left out: it reads back the same, and a sweep that later places
             # both ends explicitly is not tripped by a shape nobody asked for.
             if t.initial is not None and t.initial != InitialShape():
