@@ -116,7 +116,7 @@ def _form_inext(t, y_ptr, p_ptr, m1, blk_ptr):
 def _factor_real_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     nrods = int(p[H_NRODS])
-    return _ni.factor(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), g_re, carray(fac_ptr, (nrods, _ni.FAC_SIZE)))
+    return _ni.factor(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), g_re, carray(fac_ptr, (nrods + 1, _ni.FAC_SIZE)))
 
 
 @cfunc(FACTOR_COMPLEX_SIG, cache=True)
@@ -124,14 +124,14 @@ def _factor_complex_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     nrods = int(p[H_NRODS])
     return _ni.factor(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), complex(g_re, g_im),
-                      carray(fac_ptr, (nrods, _ni.FAC_SIZE)))  # fmt: skip
+                      carray(fac_ptr, (nrods + 1, _ni.FAC_SIZE)))  # fmt: skip
 
 
 @cfunc(SOLVE_REAL_SIG, cache=True)
 def _solve_real_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     nrods = int(p[H_NRODS])
-    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), g_re, carray(fac_ptr, (nrods, _ni.FAC_SIZE)), m1,
+    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), g_re, carray(fac_ptr, (nrods + 1, _ni.FAC_SIZE)), m1,
               carray(b_ptr, (2 * m1,)))  # fmt: skip
     return 0
 
@@ -140,7 +140,7 @@ def _solve_real_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
 def _solve_complex_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     nrods = int(p[H_NRODS])
-    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), complex(g_re, g_im), carray(fac_ptr, (nrods, _ni.FAC_SIZE)),
+    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), complex(g_re, g_im), carray(fac_ptr, (nrods + 1, _ni.FAC_SIZE)),
               m1, carray(b_ptr, (2 * m1,)))  # fmt: skip
     return 0
 
