@@ -140,8 +140,8 @@ def _solve_real_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
 def _solve_complex_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     nrods = int(p[H_NRODS])
-    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), complex(g_re, g_im), carray(fac_ptr, (nrods + 1, _ni.FAC_SIZE)),
-              m1, carray(b_ptr, (2 * m1,)))  # fmt: skip
+    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), complex(g_re, g_im),
+              carray(fac_ptr, (nrods + 1, _ni.FAC_SIZE)), m1, carray(b_ptr, (2 * m1,)))  # fmt: skip
     return 0
 
 
