@@ -22,8 +22,12 @@ the cost to reach an error is the wall time of the loosest rtol that reaches it.
 when both errors are reached, when the error has stopped changing above a target (the rods' error:
 "not reached"), or when a run hits the step cap (``MAX_STEPS``): the explicit methods, whose step is
 bounded by the stability of the axial modes (periods of 0.1-1 ms), are stopped there and their
-cost is projected from the time they reached ("capped: projected").  Last rows: the fitted
-exponent of the cost in n per combination, and the placed start's cost over the release's.
+cost is projected from the time they reached ("capped: projected").  Each row also gives the wall
+time of the integration alone and the counts of the run that set its last target (steps, rhs calls,
+Newton failures), which do not depend on the machine's load: where the whole run's cost grows
+faster than they do, the rest is the set-up (the start) or the result.  A start the model refuses
+is a row saying so.  Last rows: the fitted exponent of the cost (and of the counts) in n per
+combination, and the placed start's cost over the release's.
 
 ``MODELS`` is the list of tether models compared; a model is one entry (its scene changes).
 
@@ -187,6 +191,8 @@ def summary_rows(rows, starts) -> list[dict]:
     keys = sorted({(r["model"], r["start"], r["method"], r["error_scale"]) for r in rows}, key=str)
     for key in keys:
         sel = [r for r in rows if (r["model"], r["start"], r["method"], r["error_scale"]) == key]
+        if all(r["note"].startswith("refused") for r in sel):
+            continue  # a start the model refuses has nothing to fit
         ns = [r["rods"] for r in sel]
         row = {"model": key[0], "start": key[1], "method": key[2], "error_scale": key[3],
                "rods": f"exponent in n, {ns[0]}-{ns[-1]}"}  # fmt: skip
@@ -205,7 +211,7 @@ def summary_rows(rows, starts) -> list[dict]:
                 continue
             base = next((b for b in rows if b["start"] == "release" and all(
                 b[k] == r[k] for k in ("model", "method", "error_scale", "rods"))), None)  # fmt: skip
-            if base is None:
+            if base is None or r["note"].startswith("refused"):
                 continue
             row = {"model": r["model"], "start": "placed / release", "method": r["method"],
                    "error_scale": r["error_scale"], "rods": r["rods"]}  # fmt: skip
