@@ -274,9 +274,10 @@ def test_structured_kernel_in_the_frame_turning_with_the_orbit():
     # The frame's Coriolis and centrifugal terms (2 W, W^2 / g in the mass blocks) are what the
     # turning frame adds: the inertial matrix on the same state misses them (2 omega / g = 6e-5 at
     # g = 36/s, 0.04 at 0.05/s) and fails both bounds.
-    from tetherlab.kernel.layout import FORM_COWELL, H_FORM
+    from tetherlab.model.params import ParamView
 
     inertial = pe.copy()
-    inertial[H_FORM] = FORM_COWELL
+    ParamView(inertial).formulation = ParamView(prep.model.fresh_params()).formulation  # the model's: Cowell's
+    assert ParamView(inertial).formulation != ParamView(pe).formulation
     bad = _kernel_against_differences(rhs, inertial, y, steps, shifts, 4)
     assert max(bad[:2]) > 1e-7 and max(bad[2:]) > 5e-3
