@@ -22,8 +22,12 @@ the cost to reach an error is the wall time of the loosest rtol that reaches it.
 when both errors are reached, when the error has stopped changing above a target (the rods' error:
 "not reached"), or when a run hits the step cap (``MAX_STEPS``): the explicit methods, whose step is
 bounded by the stability of the axial modes (periods of 0.1-1 ms), are stopped there and their
-cost is projected from the time they reached ("capped: projected").  Last rows: the fitted
-exponent of the cost in n per combination, and the placed start's cost over the release's.
+cost is projected from the time they reached ("capped: projected").  Each row also gives the wall
+time of the integration alone and the counts of the run that set its last target (steps, rhs calls,
+Newton failures), which do not depend on the machine's load: where the whole run's cost grows
+faster than they do, the rest is the set-up (the start) or the result.  A start the model refuses
+is a row saying so.  Last rows: the fitted exponent of the cost (and of the counts) in n per
+combination, and the placed start's cost over the release's.
 
 ``MODELS`` is the list of tether models compared; a model is one entry (its scene changes).
 
@@ -41,6 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import SceneError
 from . import print_markdown
 from .cost_vs_n import fit_exponent
 
@@ -52,9 +57,12 @@ METHODS = ("radau5", "dop853", "vern9")
 ERROR_SCALES = ("rod", "tether")
 STARTS = ("release", "placed")
 #: the tether models side by side: name -> the scene changes that select it.  A new model adds its
-#: rows with one entry here (e.g. "inextensible": {"tethers.main.model": "inextensible"}).
+#: rows with one entry here.  The inextensible chain (docs/inextensible.md) has no axial modes:
+#: its two starts differ only by the projection of the held shape onto the rods' lengths, and
+#: RADAU5 takes its own structured Newton matrix (docs/inextensible.md 8).
 MODELS: dict[str, dict] = {
     "elastic": {},
+    "inextensible": {"tethers.main.model": "inextensible"},
 }
 #: a run stops after this many steps; the explicit methods reach it (stability-limited) and their
 #: cost is projected from the simulated time reached
@@ -89,8 +97,8 @@ def omega_bessel() -> float:
 
 def run_one(model, start, n, method, scale, rtol) -> dict:
     """One whole run, timed around ``simulate`` (set-up to result): its omega_1, wall time, the
-    integration's own wall time, steps, and whether it stopped at the step cap (then the simulated
-    time it reached)."""
+    integration's own wall time, steps, rhs calls, Newton failures (RADAU5), and whether it stopped
+    at the step cap (then the simulated time it reached)."""
     from ..oracles.continuum import fit_frequencies
     from ..oracles.hanging_chain import continuum_frequencies
     from ..pipeline import simulate
@@ -103,7 +111,8 @@ def run_one(model, start, n, method, scale, rtol) -> dict:
     ts = res.timeseries
     t_end = float(ts["t_s"].iloc[-1]) if len(ts) else 0.0
     out = {"wall_s": wall, "integration_s": float(st["wall_s"]), "steps": int(st["n_accepted"]), "ok": res.ok,
-           "t_end_s": t_end, "omega": float("nan")}  # fmt: skip
+           "rhs": int(st["n_rhs"]), "newton_fail": int(st["n_newton_fail"]), "t_end_s": t_end,
+           "omega": float("nan")}  # fmt: skip
     if res.ok:
         guesses = continuum_frequencies(10.0, 1.0, 0.5, 9.80665, count=3)
         w, _, _ = fit_frequencies(ts["t_s"].to_numpy(), ts["tip.x_m"].to_numpy(), guesses)
@@ -118,7 +127,13 @@ def ladder(model, start, n, method, scale, w_ref) -> dict:
     prev = None
     last = None
     for rtol in LADDER:
-        r = run_one(model, start, n, method, scale, rtol)
+        try:
+            r = run_one(model, start, n, method, scale, rtol)
+        except SceneError as e:
+            # a start the model refuses (the inextensible chain cannot be held at its full length:
+            # its static shape would need the rods to stretch) is a row saying so, not a crash
+            note = f"refused: {e}"
+            break
         last = r
         if not r["ok"]:
             if r["t_end_s"] > 0:
@@ -144,7 +159,11 @@ def ladder(model, start, n, method, scale, w_ref) -> dict:
         row[f"wall_s@{x:g}"] = b["wall_s"] if b else float("nan")
         row[f"integration_s@{x:g}"] = b["integration_s"] if b else float("nan")
         row[f"rtol@{x:g}"] = b["rtol"] if b else "not reached"
-    row["steps"] = (best[TARGETS[-1]] or best[TARGETS[0]] or last or {}).get("steps", 0)
+    counted = best[TARGETS[-1]] or best[TARGETS[0]] or last or {}
+    # the counts of the run that set the last target reached (else of the last run): they do not
+    # depend on the machine's load, the wall times do
+    for k in ("steps", "rhs", "newton_fail"):
+        row[k] = counted.get(k, 0)
     row["note"] = note
     return row
 
@@ -172,6 +191,8 @@ def summary_rows(rows, starts) -> list[dict]:
     keys = sorted({(r["model"], r["start"], r["method"], r["error_scale"]) for r in rows}, key=str)
     for key in keys:
         sel = [r for r in rows if (r["model"], r["start"], r["method"], r["error_scale"]) == key]
+        if all(r["note"].startswith("refused") for r in sel):
+            continue  # a start the model refuses has nothing to fit
         ns = [r["rods"] for r in sel]
         row = {"model": key[0], "start": key[1], "method": key[2], "error_scale": key[3],
                "rods": f"exponent in n, {ns[0]}-{ns[-1]}"}  # fmt: skip
@@ -179,7 +200,9 @@ def summary_rows(rows, starts) -> list[dict]:
             row[f"wall_s@{x:g}"] = fit_exponent(ns, [r[f"wall_s@{x:g}"] for r in sel])
             row[f"integration_s@{x:g}"] = fit_exponent(ns, [r[f"integration_s@{x:g}"] for r in sel])
             row[f"rtol@{x:g}"] = ""
-        row["steps"] = ""
+        for k in ("steps", "rhs"):
+            row[k] = fit_exponent(ns, [r[k] for r in sel])
+        row["newton_fail"] = ""
         row["note"] = "fitted over the rod counts that reached the target"
         out.append(row)
     if "placed" in starts and "release" in starts:
@@ -188,7 +211,7 @@ def summary_rows(rows, starts) -> list[dict]:
                 continue
             base = next((b for b in rows if b["start"] == "release" and all(
                 b[k] == r[k] for k in ("model", "method", "error_scale", "rods"))), None)  # fmt: skip
-            if base is None:
+            if base is None or r["note"].startswith("refused"):
                 continue
             row = {"model": r["model"], "start": "placed / release", "method": r["method"],
                    "error_scale": r["error_scale"], "rods": r["rods"]}  # fmt: skip
@@ -196,7 +219,8 @@ def summary_rows(rows, starts) -> list[dict]:
                 row[f"wall_s@{x:g}"] = r[f"wall_s@{x:g}"] / base[f"wall_s@{x:g}"]
                 row[f"integration_s@{x:g}"] = r[f"integration_s@{x:g}"] / base[f"integration_s@{x:g}"]
                 row[f"rtol@{x:g}"] = ""
-            row["steps"] = ""
+            for k in ("steps", "rhs", "newton_fail"):
+                row[k] = ""
             row["note"] = "cost ratio (target: elastic <= 5)"
             out.append(row)
     return out

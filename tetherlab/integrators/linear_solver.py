@@ -70,11 +70,18 @@ def data_ptr(typingctx, arr):
 class NewtonSolver:
     """The Newton matrix of one run: its name (``stats["newton_matrix"]``), and for a structured
     one the five cfuncs of the module docstring and ``arrays()``, which returns fresh work arrays
-    (blk, real factors, complex factors: 2-D, C-contiguous, float64/float64/complex128)."""
+    (blk, real factors, complex factors: 2-D, C-contiguous, float64/float64/complex128).
+
+    ``refresh``: when a structured matrix is formed again, as RADAU5's ``_F_JACEVERY`` slot
+    (radau5/constants.py): 0 Hairer's reuse rule (kept while the Newton rate stays <= THET), 1 on
+    every step at its start, 2 on every step at the middle of the coming step; None RADAU5's
+    default for structured matrices (``STRUCT_JAC_EVERY_STEP``).  A model whose matrix turns
+    little within a step (no stiff direction rotating with the motion) keeps it for many steps."""
 
     name: str
     kernels: tuple | None = None
     arrays: Callable[[], tuple] | None = None
+    refresh: int | None = None
 
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name:
@@ -88,6 +95,8 @@ class NewtonSolver:
                              f"solve_real, solve_complex) with the signatures {SIGNATURES}; got {got}")  # fmt: skip
         if not callable(self.arrays):
             raise ValueError("NewtonSolver.arrays: expected a callable returning (blk, fac_real, fac_complex)")
+        if self.refresh is not None and self.refresh not in (0, 1, 2):
+            raise ValueError(f"NewtonSolver.refresh: expected None, 0, 1 or 2; got {self.refresh!r}")
 
     @property
     def structured(self) -> bool:

@@ -13,11 +13,14 @@ per rod as (w_i, mu_i) it is block tridiagonal with 4x4 blocks: block Thomas fro
 root.  The loads' derivative is left out (zero for uniform gravity; not stiff otherwise), as the
 elastic chain's matrix (tether/newton.py) leaves it out.
 
-Only one inextensible tether from a fixed root body with a point mass or nothing at its end, in
-Cowell's inertial formulation, is understood (:func:`structure_supported` says why not otherwise).
+Understood: one inextensible tether from the centre of a root point mass, fixed or free (a free
+root's joint x_0 is one more 3x3 block, padded to 4x4, at the end of the elimination), with a
+point mass or nothing at its end, in Cowell's inertial formulation or in the frame turning with
+the orbit (cowell-orbit: the mass blocks become M (g I + W)^2 / g, as tether/newton.py's;
+docs/inextensible.md 8).  :func:`structure_supported` says why not otherwise.
 
 Storage per rod (BLK_SIZE): u (3), nu/|D| (1), e = (D'' + 2aD' + a^2 D)/|D| (3), f = 2(D' + aD)/|D|
-(3), m (1).  Factors per rod (FAC_SIZE): S^-1 of its 4x4 block (16).
+(3), m (1).  Factors per block (FAC_SIZE): S^-1 of its 4x4 block (16); the free root's block first.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ from ..kernel.layout import (
     BT_RIGID,
     BT_SIZE,
     FORM_COWELL,
+    FORM_COWELL_ORBIT,
     H_FORM,
     H_LEN,
     H_NBODY,
@@ -43,11 +47,13 @@ from ..kernel.layout import (
     H_NSTATE,
     H_NTETH,
     H_OFF_BODY,
+    H_OFF_FORM,
     H_OFF_ROD,
     H_OFF_ROOTS,
     H_OFF_SCR,
     H_OFF_TETH,
     H_ROOT_INV_M,
+    H_ROOT_M,
     H_SIZE,
     RT_CRATE,
     RT_M,
@@ -65,6 +71,7 @@ from ..kernel.layout import (
     TT_SIZE,
     TT_TIP_M,
 )
+from .newton import FRAME_OP_W, _frame_shift
 from .registry import PARTS
 from .solve import accelerations
 
@@ -90,8 +97,8 @@ def structure_supported(p, n_state, second_order):
         second_order = n_state // 2
     if not second_order:
         return "the state is not declared second order (y = [q, q'])"
-    if int(p[H_FORM]) != FORM_COWELL:
-        return f"formulation code {int(p[H_FORM])} is not Cowell's inertial one"
+    if int(p[H_FORM]) not in (FORM_COWELL, FORM_COWELL_ORBIT):
+        return f"formulation code {int(p[H_FORM])} is not Cowell's (inertial or turning with the orbit)"
     if int(p[H_NTETH]) != 1 or int(p[H_NROOT]) != 1 or int(p[H_NRIGID]) != 0 or int(p[H_NREEL]) != 0:
         return "not one inextensible tether between point masses (several tethers, roots, rigid bodies or reels)"
     nrods = int(p[H_NRODS])
@@ -102,8 +109,8 @@ def structure_supported(p, n_state, second_order):
     for b in range(int(p[H_NBODY])):
         if int(p[offb + b * BT_SIZE + BT_RIGID]) != _POINT:
             return f"body {b} is not a point mass"
-    if int(p[int(p[H_OFF_ROOTS])]) != 0 or p[H_ROOT_INV_M] > 0.0:
-        return "the root is not a fixed body (only a fixed root is modelled)"
+    if int(p[int(p[H_OFF_ROOTS])]) != 0:
+        return "the root is not body 0"
     tb = int(p[H_OFF_TETH])
     if int(p[tb + TT_PART]) != INEXTENSIBLE_PART:
         return "the tether is not inextensible"
@@ -113,18 +120,45 @@ def structure_supported(p, n_state, second_order):
 
 
 def workspace(p):
-    """Work arrays: rod data, real and complex factors."""
+    """Work arrays: rod data, real and complex factors (a row per rod and one for a free root)."""
     n = int(p[H_NRODS])
-    return (np.zeros((n, BLK_SIZE)), np.zeros((n, FAC_SIZE)), np.zeros((n, FAC_SIZE), dtype=np.complex128))
+    return (np.zeros((n, BLK_SIZE)), np.zeros((n + 1, FAC_SIZE)), np.zeros((n + 1, FAC_SIZE), dtype=np.complex128))
 
 
 @njit(cache=True)
 def form_blocks(t, y, p, m1, blk):
     """The rod data of (J3) at the state y: one rhs evaluation gives every multiplier lambda (the
     axial-force slot), the reactions J and d''; nu = (lambda + (1 - sqrt3) u.S / 2) / sqrt3
-    (docs/inextensible.md (J0)).  Returns 0, or 1 if the rhs fails there."""
+    (docs/inextensible.md (J0)).  In the frame turning with the orbit (cowell-orbit) y holds the
+    frame's components and frame-relative rates: the rhs is evaluated on the same configuration
+    read as inertial at this instant (rates v + omega x q), which leaves the multipliers (scalars)
+    as they are, and the frame's d'' is that acceleration less the Coriolis and centrifugal terms
+    (docs/inextensible.md 8).  Returns 0, or 1 if the rhs fails there."""
     acc = np.empty(m1)
-    if accelerations(t, y[:m1], y[m1 : 2 * m1], p, acc) != 0:
+    if int(p[H_FORM]) == FORM_COWELL_ORBIT:
+        o = int(p[H_OFF_FORM]) + FRAME_OP_W
+        wx = p[o]
+        wy = p[o + 1]
+        wz = p[o + 2]
+        vin = np.empty(m1)
+        for k in range(0, m1, 3):
+            vin[k] = y[m1 + k] + wy * y[k + 2] - wz * y[k + 1]
+            vin[k + 1] = y[m1 + k + 1] + wz * y[k] - wx * y[k + 2]
+            vin[k + 2] = y[m1 + k + 2] + wx * y[k + 1] - wy * y[k]
+        if accelerations(t, y[:m1], vin, p, acc) != 0:
+            return 1
+        for k in range(0, m1, 3):
+            # a_frame = a - 2 w x v - w x (w x q), v the frame-relative rate
+            vx = y[m1 + k]
+            vy = y[m1 + k + 1]
+            vz = y[m1 + k + 2]
+            cx = wy * y[k + 2] - wz * y[k + 1]  # w x q
+            cy = wz * y[k] - wx * y[k + 2]
+            cz = wx * y[k + 1] - wy * y[k]
+            acc[k] -= 2.0 * (wy * vz - wz * vy) + (wy * cz - wz * cy)
+            acc[k + 1] -= 2.0 * (wz * vx - wx * vz) + (wz * cx - wx * cz)
+            acc[k + 2] -= 2.0 * (wx * vy - wy * vx) + (wx * cy - wy * cx)
+    elif accelerations(t, y[:m1], y[m1 : 2 * m1], p, acc) != 0:
         return 1
     tb = int(p[H_OFF_TETH])
     n = int(p[tb + TT_NRODS])
@@ -203,8 +237,10 @@ def _inv4(s, out):
 
 
 @njit(cache=True)
-def _diag(blk, i, n, mf, g, out):
-    """The 4x4 diagonal block of rod i (joint x_i's rows and rod i's constraint row)."""
+def _diag(blk, i, n, mf, sg, g, out):
+    """The 4x4 diagonal block of rod i (joint x_{i+1}'s rows and rod i's constraint row).  The mass
+    terms are M S, S the shift of :func:`.newton._frame_shift` (g I; (g I + W)^2 / g in the frame
+    turning with the orbit, its Coriolis and centrifugal terms)."""
     ginv = 1.0 / g
     b = blk[i]
     mass = b[B_M] / 3.0 + (blk[i + 1][B_M] / 3.0 if i < n - 1 else mf)
@@ -214,7 +250,7 @@ def _diag(blk, i, n, mf, g, out):
         for c in range(3):
             uu = b[B_U + r] * b[B_U + c]
             de = 1.0 if r == c else 0.0
-            v = g * mass * de + b[B_KG] * (de - uu) * ginv
+            v = mass * sg[3 * r + c] + b[B_KG] * (de - uu) * ginv
             if i < n - 1:
                 bn = blk[i + 1]
                 v += bn[B_KG] * (de - bn[B_U + r] * bn[B_U + c]) * ginv
@@ -224,10 +260,37 @@ def _diag(blk, i, n, mf, g, out):
 
 
 @njit(cache=True)
-def _couple(blk, i, g, out):
-    """The 4x4 block coupling rod i's rows with rod i+1's unknowns (upper, C_i) -- and, by the
-    symmetry of M and K, the 3x3 joint part of rod i+1's rows on rod i's unknowns (lower B_{i+1}),
-    whose constraint row is the diagonal's with the sign changed."""
+def _diag_root(blk, m0, sg, g, out):
+    """The 4x4 block of a free root's joint x_0: (m0 + m_1/3) S + K_1/g, and a unit row and column
+    for a fourth unknown that is identically zero (the root carries no multiplier; padding it
+    keeps every block of the elimination 4x4)."""
+    ginv = 1.0 / g
+    b = blk[0]
+    mass = m0 + b[B_M] / 3.0
+    for r in range(16):
+        out[r] = 0.0 * g
+    for r in range(3):
+        for c in range(3):
+            de = 1.0 if r == c else 0.0
+            out[4 * r + c] = mass * sg[3 * r + c] + b[B_KG] * (de - b[B_U + r] * b[B_U + c]) * ginv
+    out[15] = 1.0 + 0.0 * g
+
+
+@njit(cache=True)
+def _block_diag(blk, j, nr, n, mf, m0, sg, g, out):
+    """Diagonal block j of the elimination: the free root's (j < nr), else rod j - nr's."""
+    if j < nr:
+        _diag_root(blk, m0, sg, g, out)
+    else:
+        _diag(blk, j - nr, n, mf, sg, g, out)
+
+
+@njit(cache=True)
+def _couple(blk, i, sg, g, out):
+    """The 4x4 block coupling joint x_{i+1}'s rows (rod i's block; i = -1: the free root's joint
+    x_0) with rod i+1's unknowns (upper, C_i) -- and, by the symmetry of M (scalar per joint pair)
+    and K, the 3x3 joint part of rod i+1's rows on the unknowns of block i (lower B_{i+1}), whose
+    constraint row is the diagonal's with the sign changed."""
     ginv = 1.0 / g
     bn = blk[i + 1]
     for r in range(16):
@@ -236,37 +299,46 @@ def _couple(blk, i, g, out):
         for c in range(3):
             uu = bn[B_U + r] * bn[B_U + c]
             de = 1.0 if r == c else 0.0
-            out[4 * r + c] = g * bn[B_M] / 6.0 * de - bn[B_KG] * (de - uu) * ginv
+            out[4 * r + c] = bn[B_M] / 6.0 * sg[3 * r + c] - bn[B_KG] * (de - uu) * ginv
         out[4 * r + 3] = -bn[B_U + r]
 
 
 @njit(cache=True)
-def factor(p, blk, g, fac):
-    """S_{n-1} = A_{n-1}, S_i = A_i - C_i S_{i+1}^-1 B_{i+1} (rods 0-based, tip first); S_i^-1 into
-    fac[i].  B_{i+1}: joint rows [g m/6 I - K_{i+1}/g, 0], constraint row [-c_{i+1}^T, 0].
-    Returns 0, or 1 for a singular block."""
+def _layout(p):
+    """(rods, tip mass, root mass, blocks before the rods' (1 for a free root, else 0))."""
     tb = int(p[H_OFF_TETH])
     n = int(p[tb + TT_NRODS])
     mf = p[tb + TT_TIP_M] if int(p[tb + TT_CHILD]) >= 0 else 0.0
+    free = p[H_ROOT_INV_M] > 0.0
+    return n, mf, (p[H_ROOT_M] if free else 0.0), (1 if free else 0)
+
+
+@njit(cache=True)
+def factor(p, blk, g, fac):
+    """Blocks j = 0 .. nb-1 (the free root's first, then the rods'), from the tip:
+    S_{nb-1} = A_{nb-1}, S_j = A_j - C_j S_{j+1}^-1 B_{j+1}; S_j^-1 into fac[j].  B_{j+1}: joint
+    rows [m/6 S - K/g, 0], constraint row [-c^T, 0].  Returns 0, or 1 for a singular block."""
+    n, mf, m0, nr = _layout(p)
+    sg = np.empty(9, dtype=fac.dtype)
+    _frame_shift(p, g, sg)
     s = np.empty(16, dtype=fac.dtype)
     cu = np.empty(16, dtype=fac.dtype)
     bl = np.empty(16, dtype=fac.dtype)
     dn = np.empty(16, dtype=fac.dtype)
     tmp = np.empty(16, dtype=fac.dtype)
-    for i in range(n - 1, -1, -1):
-        _diag(blk, i, n, mf, g, s)
-        if i < n - 1:
-            _couple(blk, i, g, cu)
-            # B_{i+1}: rows of rod i+1 on rod i's unknowns
-            _diag(blk, i + 1, n, mf, g, dn)
+    nb = n + nr
+    for j in range(nb - 1, -1, -1):
+        _block_diag(blk, j, nr, n, mf, m0, sg, g, s)
+        if j < nb - 1:
+            _couple(blk, j - nr, sg, g, cu)
+            _block_diag(blk, j + 1, nr, n, mf, m0, sg, g, dn)
             for r in range(16):
                 bl[r] = 0.0 * g
             for r in range(3):
                 for c in range(3):
-                    bl[4 * r + c] = cu[4 * r + c]  # the 3x3 joint part is symmetric
+                    bl[4 * r + c] = cu[4 * r + c]  # the 3x3 joint part is the same
                 bl[12 + r] = -dn[12 + r]
-            # tmp = S_{i+1}^-1 B_{i+1}
-            f = fac[i + 1]
+            f = fac[j + 1]
             for r in range(4):
                 for c in range(4):
                     v = 0.0 * g
@@ -279,7 +351,7 @@ def factor(p, blk, g, fac):
                     for e in range(4):
                         v += cu[4 * r + e] * tmp[4 * e + c]
                     s[4 * r + c] -= v
-        if not _inv4(s, fac[i]):
+        if not _inv4(s, fac[j]):
             return 1
     return 0
 
@@ -287,87 +359,111 @@ def factor(p, blk, g, fac):
 @njit(cache=True)
 def solve(p, blk, g, fac, m1, b):
     """b[:2 m1] <- (g I - J)^-1 b through (J3) (module docstring), in place."""
-    tb = int(p[H_OFF_TETH])
-    n = int(p[tb + TT_NRODS])
-    mf = p[tb + TT_TIP_M] if int(p[tb + TT_CHILD]) >= 0 else 0.0
+    n, mf, m0, nr = _layout(p)
+    sg = np.empty(9, dtype=b.dtype)
+    frame = _frame_shift(p, g, sg)
     ginv = 1.0 / g
     k2 = 2.0 * SQ3
-    xv = np.zeros(3 * (n + 1), dtype=b.dtype)  # joints 0..n, x_0 = 0 (the fixed root)
+    nb = n + nr
+    # joints 0..n: x_0 the root (a fixed root's perturbation moves nothing: 0), x_j = x_{j-1} + 2 sqrt3 d_j
+    xv = np.zeros(3 * (n + 1), dtype=b.dtype)
     xq = np.zeros(3 * (n + 1), dtype=b.dtype)
+    if nr:
+        for c in range(3):
+            xv[c] = b[m1 + c]
+            xq[c] = b[c]
     for i in range(n):
         for c in range(3):
             xv[3 * i + 3 + c] = xv[3 * i + c] + k2 * b[m1 + 3 + 3 * i + c]
             xq[3 * i + 3 + c] = xq[3 * i + c] + k2 * b[3 + 3 * i + c]
-    r = np.zeros(4 * n, dtype=b.dtype)
-    for i in range(n):  # rod i between joints i and i+1 (joint j's unknowns are block j-1)
+    # xm = xv, or xv - W^2 xq / g in the frame turning with omega (the centrifugal term's share)
+    xm = xv.copy()
+    if frame:
+        o = int(p[H_OFF_FORM]) + FRAME_OP_W
+        wx = p[o]
+        wy = p[o + 1]
+        wz = p[o + 2]
+        w2 = wx * wx + wy * wy + wz * wz
+        for j in range(n + 1):
+            wq = wx * xq[3 * j] + wy * xq[3 * j + 1] + wz * xq[3 * j + 2]
+            # W^2 q = w (w . q) - |w|^2 q
+            xm[3 * j] -= (wx * wq - w2 * xq[3 * j]) * ginv
+            xm[3 * j + 1] -= (wy * wq - w2 * xq[3 * j + 1]) * ginv
+            xm[3 * j + 2] -= (wz * wq - w2 * xq[3 * j + 2]) * ginv
+    r = np.zeros(4 * nb, dtype=b.dtype)
+    if nr:
+        for c in range(3):
+            r[c] += m0 * xm[c]
+    for i in range(n):  # rod i between joints i and i+1 (joint j's unknowns are block j - 1 + nr)
         bl = blk[i]
         m = bl[B_M]
         ia = 3 * i
         ib = 3 * i + 3
+        jb = 4 * (i + nr)
+        ja = 4 * (i - 1 + nr)
         dvq = (xq[ib] - xq[ia], xq[ib + 1] - xq[ia + 1], xq[ib + 2] - xq[ia + 2])
         udq = bl[B_U] * dvq[0] + bl[B_U + 1] * dvq[1] + bl[B_U + 2] * dvq[2]
         for c in range(3):
             kq = bl[B_KG] * (dvq[c] - udq * bl[B_U + c])  # K_i (x_B - x_A)
-            # joint B (block i): m/3 x_B + m/6 x_A, -K b_q/g on B
-            r[4 * i + c] += m / 3.0 * xv[ib + c] + m / 6.0 * xv[ia + c] - kq * ginv
-            if i > 0:  # joint A is free (block i-1)
-                r[4 * (i - 1) + c] += m / 3.0 * xv[ia + c] + m / 6.0 * xv[ib + c] + kq * ginv
+            r[jb + c] += m / 3.0 * xm[ib + c] + m / 6.0 * xm[ia + c] - kq * ginv
+            if ja >= 0:  # joint A is an unknown (a rod's joint, or the free root's)
+                r[ja + c] += m / 3.0 * xm[ia + c] + m / 6.0 * xm[ib + c] + kq * ginv
         if i == n - 1 and mf > 0.0:
             for c in range(3):
-                r[4 * i + c] += mf * xv[ib + c]
+                r[jb + c] += mf * xm[ib + c]
         gv = 0.0 * g
         eq = 0.0 * g
         for c in range(3):
             gv += bl[B_U + c] * (xv[ib + c] - xv[ia + c])
             eq += bl[B_E + c] * (xq[ib + c] - xq[ia + c])
-        r[4 * i + 3] = gv - eq * ginv
-    # forward: y_i = r_i - C_i S_{i+1}^-1 y_{i+1}, tip first
+        r[jb + 3] = gv - eq * ginv
+    # forward: y_j = r_j - C_j S_{j+1}^-1 y_{j+1}, tip first
     cu = np.empty(16, dtype=b.dtype)
     v = np.empty(4, dtype=b.dtype)
-    for i in range(n - 2, -1, -1):
-        f = fac[i + 1]
+    for j in range(nb - 2, -1, -1):
+        f = fac[j + 1]
         for a in range(4):
             acc = 0.0 * g
             for e in range(4):
-                acc += f[4 * a + e] * r[4 * (i + 1) + e]
+                acc += f[4 * a + e] * r[4 * (j + 1) + e]
             v[a] = acc
-        _couple(blk, i, g, cu)
+        _couple(blk, j - nr, sg, g, cu)
         for a in range(4):
             acc = 0.0 * g
             for e in range(4):
                 acc += cu[4 * a + e] * v[e]
-            r[4 * i + a] -= acc
-    # back: w_0 = S_0^-1 y_0, w_i = S_i^-1 (y_i - B_i w_{i-1})
-    w = np.zeros(4 * n, dtype=b.dtype)
+            r[4 * j + a] -= acc
+    # back: w_0 = S_0^-1 y_0, w_j = S_j^-1 (y_j - B_j w_{j-1})
+    w = np.zeros(4 * nb, dtype=b.dtype)
     dn = np.empty(16, dtype=b.dtype)
-    for i in range(n):
-        e4 = np.empty(4, dtype=b.dtype)
+    e4 = np.empty(4, dtype=b.dtype)
+    for j in range(nb):
         for a in range(4):
-            e4[a] = r[4 * i + a]
-        if i > 0:
-            _couple(blk, i - 1, g, cu)  # its 3x3 part is B_i's joint part
-            _diag(blk, i, n, mf, g, dn)
+            e4[a] = r[4 * j + a]
+        if j > 0:
+            _couple(blk, j - 1 - nr, sg, g, cu)  # its 3x3 part is B_j's joint part
+            _block_diag(blk, j, nr, n, mf, m0, sg, g, dn)
             for a in range(3):
                 acc = 0.0 * g
                 for c in range(3):
-                    acc += cu[4 * a + c] * w[4 * (i - 1) + c]
+                    acc += cu[4 * a + c] * w[4 * (j - 1) + c]
                 e4[a] -= acc
             acc = 0.0 * g
             for c in range(3):
-                acc += -dn[12 + c] * w[4 * (i - 1) + c]
+                acc += -dn[12 + c] * w[4 * (j - 1) + c]
             e4[3] -= acc
-        f = fac[i]
+        f = fac[j]
         for a in range(4):
             acc = 0.0 * g
             for e in range(4):
                 acc += f[4 * a + e] * e4[e]
-            w[4 * i + a] = acc
-    # back to q: z_v(d_i) = (w_i - w_{i-1}) / (2 sqrt3), the fixed root's z_v = b_v / g
+            w[4 * j + a] = acc
+    # back to q: z_v(root) = w_0 (free) or b_v / g (fixed); z_v(d_i) = (w of joint i+1 - of joint i) / (2 sqrt3)
     for c in range(3):
-        b[m1 + c] = b[m1 + c] * ginv
+        b[m1 + c] = w[c] if nr else b[m1 + c] * ginv
     for i in range(n):
         for c in range(3):
-            wa = w[4 * (i - 1) + c] if i > 0 else 0.0 * g
-            b[m1 + 3 + 3 * i + c] = (w[4 * i + c] - wa) / k2
+            wa = w[4 * (i - 1 + nr) + c] if i - 1 + nr >= 0 else 0.0 * g
+            b[m1 + 3 + 3 * i + c] = (w[4 * (i + nr) + c] - wa) / k2
     for i in range(m1):
         b[i] = (b[i] + b[m1 + i]) * ginv

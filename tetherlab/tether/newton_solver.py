@@ -13,6 +13,7 @@ linear_solver.py (pointers in, the arrays rebuilt from the shapes the parameter 
 
 from __future__ import annotations
 
+import contextlib
 import functools
 
 from numba import carray, cfunc
@@ -34,6 +35,30 @@ from . import newton_inextensible as _ni
 AUTO_STRUCTURED_MIN_RODS = 4
 #: ... and with rigid bodies (the bordered matrix) from this many rods on
 AUTO_BORDERED_MIN_RODS = 32
+#: When RADAU5 forms the inextensible chain's matrix again (linear_solver.NewtonSolver.refresh):
+#: Hairer's reuse rule.  Its stiffness is the lateral modes', which do not turn within a step as
+#: an elastic tether's axial direction does (docs/integrators.md section 7), so a Jacobian holds
+#: for many steps: on the hanging chain (mode start, 16 and 64 rods, rtol 1e-7 and 1e-8) 1 Jacobian
+#: and 8-9 factorisations per run instead of 44-65 of each, the same steps, rhs calls (+0-3 %)
+#: and no Newton failure (docs/inextensible.md section 8).
+INEXTENSIBLE_REFRESH = 0
+
+#: the request every :func:`choose` call takes while :func:`_forcing` is active (None: its own)
+_FORCED: list = [None]
+
+
+@contextlib.contextmanager
+def _forcing(request):
+    """Every run inside takes ``request`` ("dense", "structured", "auto") as its Newton matrix: the
+    switch a test or bench uses to run one scene both ways (no scene key chooses the matrix)."""
+    if request not in ("auto", "dense", "structured"):
+        raise ValueError(f"newton: expected 'auto', 'dense' or 'structured'; got {request!r}")
+    before = _FORCED[0]
+    _FORCED[0] = request
+    try:
+        yield
+    finally:
+        _FORCED[0] = before
 
 
 @cfunc(FORM_SIG, cache=True)
@@ -91,7 +116,7 @@ def _form_inext(t, y_ptr, p_ptr, m1, blk_ptr):
 def _factor_real_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     nrods = int(p[H_NRODS])
-    return _ni.factor(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), g_re, carray(fac_ptr, (nrods, _ni.FAC_SIZE)))
+    return _ni.factor(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), g_re, carray(fac_ptr, (nrods + 1, _ni.FAC_SIZE)))
 
 
 @cfunc(FACTOR_COMPLEX_SIG, cache=True)
@@ -99,14 +124,14 @@ def _factor_complex_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     nrods = int(p[H_NRODS])
     return _ni.factor(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), complex(g_re, g_im),
-                      carray(fac_ptr, (nrods, _ni.FAC_SIZE)))  # fmt: skip
+                      carray(fac_ptr, (nrods + 1, _ni.FAC_SIZE)))  # fmt: skip
 
 
 @cfunc(SOLVE_REAL_SIG, cache=True)
 def _solve_real_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     nrods = int(p[H_NRODS])
-    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), g_re, carray(fac_ptr, (nrods, _ni.FAC_SIZE)), m1,
+    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), g_re, carray(fac_ptr, (nrods + 1, _ni.FAC_SIZE)), m1,
               carray(b_ptr, (2 * m1,)))  # fmt: skip
     return 0
 
@@ -115,8 +140,8 @@ def _solve_real_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
 def _solve_complex_inext(g_re, g_im, p_ptr, blk_ptr, fac_ptr, m1, b_ptr):
     p = carray(p_ptr, (int(p_ptr[H_LEN]),))
     nrods = int(p[H_NRODS])
-    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), complex(g_re, g_im), carray(fac_ptr, (nrods, _ni.FAC_SIZE)),
-              m1, carray(b_ptr, (2 * m1,)))  # fmt: skip
+    _ni.solve(p, carray(blk_ptr, (nrods, _ni.BLK_SIZE)), complex(g_re, g_im),
+              carray(fac_ptr, (nrods + 1, _ni.FAC_SIZE)), m1, carray(b_ptr, (2 * m1,)))  # fmt: skip
     return 0
 
 
@@ -134,12 +159,15 @@ def choose(p, n_state, second_order, request="auto") -> NewtonSolver:
     """
     if request not in ("auto", "dense", "structured"):
         raise ValueError(f"newton: expected 'auto', 'dense' or 'structured'; got {request!r}")
+    if _FORCED[0] is not None:
+        request = _FORCED[0]
     if request == "dense":
         return dense("requested")
     if _ni.has_inextensible(p):
         why = _ni.structure_supported(p, n_state, second_order)
         if not why:
-            return NewtonSolver("structured", KERNELS_INEXTENSIBLE, functools.partial(_ni.workspace, p.copy()))
+            return NewtonSolver("structured", KERNELS_INEXTENSIBLE, functools.partial(_ni.workspace, p.copy()),
+                                refresh=INEXTENSIBLE_REFRESH)  # fmt: skip
         if request == "structured":
             raise ValueError(f"newton: 'structured' is not available for this inextensible chain: {why}")
         return dense(f"inextensible chain: {why}")

@@ -88,6 +88,7 @@ def radau5_workspace(n, m1=0, newton=None):
     is_[_I_NBORDER] = nb
     fs[_F_THSTEP] = THETA_STEP
     fs[_F_NIT] = NIT_STRUCT if structured else NIT
-    fs[_F_JACEVERY] = float(STRUCT_JAC_EVERY_STEP) if structured else 0.0
+    if structured:
+        fs[_F_JACEVERY] = float(STRUCT_JAC_EVERY_STEP if newton.refresh is None else newton.refresh)
     fs[_F_FLOOR] = FLOOR_GAIN
     return ws
