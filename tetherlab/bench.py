@@ -157,10 +157,11 @@ EXTRA_SECTIONS = (
     ("forest_newton", "RADAU5 on a forest (two bench-libration-like systems, D = 2e4 N s): dense against the "
                       "structured Newton matrix, per simulated second against the rods per tether; last rows: "
                       "fitted exponents (docs/integrators.md 13)"),
-    ("hanging_chain", "Hanging chain with a tip mass, 35 s, RADAU5: wall time (set-up included) to reach 1e-4 and "
+    ("hanging_chain", "Hanging chain with a tip mass, 35 s, elastic and inextensible models, RADAU5, DOP853 and Vern9: wall "
+                      "time (set-up included) to reach 1e-4 and "
                       "1e-5 in the first lateral frequency from the mode start, the angle release and the held start "
                       "(docs/hanging-chain.md 4); last rows: fitted exponents in n"),
-    ("hanging_chain_inextensible", "Hanging chain with a tip mass, 35 s, model inextensible, DOP853 and Vern9: wall "
+    ("hanging_chain_inextensible", "Hanging chain with a tip mass, 35 s, model inextensible, RADAU5, DOP853 and Vern9: wall "
                                    "time (set-up included) to reach 1e-4 and 1e-5 in the first lateral frequency from "
                                    "the mode start (docs/inextensible.md 7; target <= 0.10 s at 32 rods); last rows: "
                                    "fitted exponents in n (target <= 1.2)"),
