@@ -17,7 +17,7 @@ def static_start(scene, root, tethers, specs, effects, central, nq, y0):
     (docs/catenary.md).  Returns (y0, R_f).  A solve that fails is refused here: only solving
     tells.
     """
-    from ..statics import held_model, solve
+    from ..statics import NoTautEquilibrium, held_model, solve
 
     t = tethers[0]
     path = f"tethers.{t.name}.initial.shape"
@@ -37,6 +37,11 @@ def static_start(scene, root, tethers, specs, effects, central, nq, y0):
                          f"{reach:.9g} m from the root")  # fmt: skip
     try:
         eq = solve(held, r0, tip_r, down=down)
+    except NoTautEquilibrium as exc:
+        # a tether does not push: where no taut equilibrium holds the end mass, its placement,
+        # not the solver, is what the user can change
+        raise SceneError(where, "an end mass placed where the tether hangs with every rod taut",
+                         f"{reach:.9g} m from the root: {exc}") from None  # fmt: skip
     except ValueError as exc:
         if specs[0].tension_only:  # the placement, not the solver, is what the user can change
             raise SceneError(where, "an end mass placed where the tension-only tether hangs with every rod taut",
