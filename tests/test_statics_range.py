@@ -85,8 +85,11 @@ FAST = [(n, ea, h) for n in (1, 2, 8, 64) for ea in (1e3, 1e7, 1e9) for h in HOL
 
 
 def _speed(n, ea, h):
-    # the 64-rod refusals run the continuation to its end (tens of seconds on a shared machine)
-    slow = n == 64 and ea == 1e3 and h in ("0.1%", "1%")
+    # at 64 rods a solve the plain Newton does not finish runs its FD Jacobian (O(n^2)) many times:
+    # up to 22 s for a shooting fallback and 120-130 s for a refusal after the continuation
+    # (measured on a shared machine, load ~8 on 2 cores); kept fast: the proven refusals on the
+    # vertical (before any iteration) and EA = 1e7 N but for 0.1 % and 45 deg (4 s each)
+    slow = n == 64 and h != "vertical" and not (ea == 1e7 and h in ("1%", "5deg", "horizontal"))
     return pytest.param(n, ea, h, marks=pytest.mark.slow) if slow else (n, ea, h)
 
 
