@@ -122,6 +122,7 @@ def test_vertical_refusal_is_proven_and_immediate(monkeypatch):
     assert not calls and err.value.proven
     assert err.value.hang_m == pytest.approx(L_M * (1 + G * MASS_KG / 2 / 1e7), rel=1e-15)
     assert err.value.free_hang_m == pytest.approx(L_M * (1 + G * (MASS_KG / 2 + TIP_KG) / 1e7), rel=1e-15)
+    monkeypatch.undo()
     # just beyond the hang length the same hold converges, taut
     eq = solve(_held(8, 1e7), np.zeros(3), np.array([0.0, 0.0, -(err.value.hang_m + 1e-6)]))
     assert np.all(eq.axial_force_N > 0.0)
