@@ -126,3 +126,33 @@ def test_vertical_refusal_is_proven_and_immediate(monkeypatch):
     # just beyond the hang length the same hold converges, taut
     eq = solve(_held(8, 1e7), np.zeros(3), np.array([0.0, 0.0, -(err.value.hang_m + 1e-6)]))
     assert np.all(eq.axial_force_N > 0.0)
+
+
+def _placed(**changes):
+    import tetherlab
+    from tests.helpers import SCENES
+
+    return tetherlab.load_scene(SCENES / "hanging-chain-placed.toml").replace(**changes)
+
+
+def test_scene_hold_on_the_vertical_is_refused_naming_the_position():
+    # an elastic tether (not tension-only) placed at its length below the nail: the SceneError
+    # names the end mass's position, the distance asked and the hang length it would need
+    from tetherlab.errors import SceneError
+    from tetherlab.pipeline import prepare
+
+    with pytest.raises(SceneError) as err:
+        prepare(_placed(**{"bodies.tip.position": ["0 m", "0 m", "-10 m"], "tethers.main.rods": 8}))
+    assert err.value.key == "bodies.tip.position", str(err.value)
+    hang = L_M * (1 + G * MASS_KG / 2 / 1e7)  # EA of hanging-chain-placed.toml: 1e7 N
+    assert "held 10 m from the root" in str(err.value) and f"{hang:.9g} m long" in str(err.value), str(err.value)
+
+
+def test_inextensible_hold_on_the_vertical_at_its_length_still_starts():
+    # the inextensible tether's start restores its rods' lengths: at its length on the vertical it
+    # is the straight, taut chain (its elastic stand-in is a strut there, kept: taut_only False)
+    from tetherlab.pipeline import prepare
+
+    prep = prepare(_placed(**{"tethers.main.model": "inextensible", "tethers.main.rods": 8,
+                              "bodies.tip.position": ["0 m", "0 m", "-10 m"]}))  # fmt: skip
+    assert np.all(np.isfinite(prep.y0))

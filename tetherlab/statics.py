@@ -552,7 +552,7 @@ def _refusal_text(refusal, span, down, why):
         if refusal[3]:
             return text + ": held on the vertical, a taut tether needs at least that distance; hold the end mass at least that far, or off the vertical"
         if s < refusal[1]:
-            text += ": the extra length must hang as a loop below the end mass, which its rods did not form"
+            text += ": the extra length must hang as a loop below the end mass, and none was found"
     return text + (f" ({why})" if why else "") + "; move the end mass further from the root or further off the vertical"
 
 
@@ -597,6 +597,7 @@ def solve(
     guess_joints: np.ndarray | None = None,
     force_tol_N: float | None = None,
     max_iter: int = 60,
+    taut_only: bool = True,
 ) -> Equilibrium:
     """Static equilibrium with the root at ``root_m`` and the end mass held at ``tip_m``.
 
@@ -610,6 +611,11 @@ def solve(
     found by shooting on three unknowns (:func:`shot_joints`) is the start of a Newton iteration
     globalised by a trust region (:func:`_trust_newton`), which meets the same tolerances on the
     model's own equations (docs/catenary.md section 3.1).
+
+    ``taut_only`` (n > 1): refuse a hold with no equilibrium with every rod in tension
+    (:class:`NoTautEquilibrium`, section 3.2), after a continuation in the hold angle; False keeps
+    the strut Newton converged to (the elastic stand-in of an inextensible tether, whose start
+    restores the rods' lengths: straight on the vertical at its length).
     """
     if not model.root_fixed:
         raise ValueError("model.root_fixed: expected True (a fixed root, the nail), got False")
@@ -672,7 +678,7 @@ def solve(
         return rs.r1[:n] + rs.r2[:n], ParamView(p).body_scratch.f_eff[1, :3].copy()
 
     uniform = _uniform_loads(p, slot)
-    refusal = _refusal_lengths(uniform, tether, model, ea_rods, span, down, n) if guess_joints is None else None
+    refusal = _refusal_lengths(uniform, tether, model, ea_rods, span, down, n) if guess_joints is None and taut_only else None
     if refusal is not None and refusal[3]:
         raise NoTautEquilibrium(_refusal_text(refusal, span, down, None), *refusal)
 
@@ -744,7 +750,7 @@ def solve(
                 except (_NoConvergence, np.linalg.LinAlgError):
                     x = None
         first_error = str(first)
-    if first_error is not None and x is None and guess_joints is None and n > 1:
+    if first_error is not None and x is None and guess_joints is None and n > 1 and (taut_only or newton_x is None):
         # the globalisation: continuation in the hold angle from the horizontal (section 3.2)
         why = "the continuation is switched off"
         if CONTINUATION:
@@ -775,7 +781,7 @@ def solve(
             refusal = refusal or (None, None, None, False)
             raise NoTautEquilibrium(_refusal_text(refusal, span, down, why), float(np.linalg.norm(span)), *refusal[1:])
     if first_error is not None and x is None and newton_x is not None:
-        x = newton_x  # one rod only reaches here (n > 1 is refused above)
+        x = newton_x  # one rod, or a strut asked for (taut_only False)
         method = "newton"
     if first_error is not None and x is None:
         why = (
