@@ -21,7 +21,7 @@ import time
 import numpy as np
 
 from tetherlab.forces import uniform_gravity
-from tetherlab.statics import held_model, solve
+from tetherlab.statics import NoTautEquilibrium, held_model, solve
 from tetherlab.system import TetherSpec
 
 L_M, MASS_KG, TIP_KG, G = 10.0, 1.0, 0.5, 9.80665
@@ -53,6 +53,9 @@ def one(n: int, ea_n: float, angle: str) -> dict:
     row = {"rods": n, "EA_N": ea_n, "angle": angle}
     try:
         eq = solve(model, np.zeros(3), tip_at(ANGLES[angle]))
+    except NoTautEquilibrium as exc:
+        row.update(method="REFUSED-PROVEN" if exc.proven else "REFUSED", iterations=-1, residual_N=math.nan,
+                   min_axial_N=math.nan, error=str(exc)[-160:])
     except ValueError as exc:
         row.update(method="FAIL", iterations=-1, residual_N=math.nan, min_axial_N=math.nan, error=str(exc)[:160])
     else:
@@ -62,19 +65,21 @@ def one(n: int, ea_n: float, angle: str) -> dict:
     return row
 
 
-CODES = {"newton": "N", "shooting": "S", "chord": "C", "trust-region": "T", "FAIL": "F"}
+CODES = {"newton": "N", "shooting": "S", "chord": "C", "trust-region": "T", "continuation": "K", "FAIL": "F",
+         "REFUSED-PROVEN": "V", "REFUSED": "R"}
 
 
 def table(path: str) -> str:
     """The CSV of a run as one markdown table: a row per (rods, EA), a column per angle; N newton,
-    S shooting, C chord (one rod), F failed (ValueError); lower case: the equilibrium returned has a
+    S shooting, C chord (one rod), K continuation, F failed (ValueError), V refused (no taut
+    equilibrium exists: the vertical), R refused (none found: docs/catenary.md 3.2); lower case: the equilibrium returned has a
     rod in compression (a strut, not a hanging tether)."""
     rows = list(csv.DictReader(open(path)))
     angles = list(dict.fromkeys(r["angle"] for r in rows))
     cells = {}
     for r in rows:
         c = CODES.get(r["method"], "?")
-        if c != "F" and float(r["min_axial_N"]) < 0.0:
+        if c not in "FVR" and float(r["min_axial_N"]) < 0.0:
             c = c.lower()
         cells.setdefault((int(r["rods"]), float(r["EA_N"])), {})[r["angle"]] = c
     out = ["| rods | EA N | " + " | ".join(angles) + " |", "|---|---|" + "---|" * len(angles)]

@@ -151,7 +151,7 @@ def test_orbital_fallback_negative_control():
     real = statics._field_shot
     statics._field_shot = lambda *a, **k: None
     try:
-        with pytest.raises(ValueError, match="no convergence"):
+        with pytest.raises(ValueError, match="no equilibrium with every rod in tension was found"):
             solve(_orbit_held(16), root, root + np.array([h[2], 0.0, h[0]]), down=(-1.0, 0.0, 0.0))
     finally:
         statics._field_shot = real

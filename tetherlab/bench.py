@@ -165,6 +165,8 @@ EXTRA_SECTIONS = (
                                    "time (set-up included) to reach 1e-4 and 1e-5 in the first lateral frequency from "
                                    "the mode start (docs/inextensible.md 7; target <= 0.10 s at 32 rods); last rows: "
                                    "fitted exponents in n (target <= 1.2)"),
+    ("statics", "Statics solve (hanging chain, EA = 1e7 N, held at its length 30 deg and 1 % off the vertical): "
+                "wall time and Newton iterations against n = 8 ... 512; last rows: fitted exponents over 64-512"),
     ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity"),
     ("igrf", "IGRF-14 field: cost of one evaluation against the degree (target: degree 13 in a few us)"),
     ("rigid", "Right-hand-side cost: rigid root + 3 wheels + 4 tethers against the point-mass hub"),

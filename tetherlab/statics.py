@@ -307,6 +307,114 @@ class _NoConvergence(Exception):
     """A Newton run that ended without meeting its tolerances (message: why)."""
 
 
+class NoTautEquilibrium(ValueError):
+    """The end mass is held where no equilibrium with every rod in tension was found (n > 1).
+
+    ``span_m``: the hold distance asked; ``hang_m``: the length the tether takes hanging along the
+    load under its own weight with nothing pulling its end, ``free_hang_m``: with the end mass
+    hanging free from it (both None when the loads are not uniform); ``proven``: True when no taut
+    equilibrium exists (a hold on the line of a uniform load shorter than ``hang_m``), False when
+    the solver found none (docs/catenary.md 3.2)."""
+
+    def __init__(self, message, span_m, hang_m=None, free_hang_m=None, proven=False):
+        super().__init__(message)
+        self.span_m = span_m
+        self.hang_m = hang_m
+        self.free_hang_m = free_hang_m
+        self.proven = proven
+
+
+def hang_lengths(lengths_m, masses_kg, ea_N, g_m_s2: float, tip_pull_N: float):
+    """(length hanging with nothing pulling its end, length with ``tip_pull_N`` pulling it) of a
+    chain of rods hanging straight along a uniform load ``g_m_s2``: rod i carries the weight below
+    its centre, T_i = g (sum_{k>i} m_k + m_i / 2), and is stretched by T_i / EA_i (eq. 1)."""
+    lengths = np.asarray(lengths_m, float)
+    m = np.asarray(masses_kg, float)
+    ea = np.asarray(ea_N, float)
+    below = np.cumsum(m[::-1])[::-1] - 0.5 * m  # mass below each rod's centre
+    t = g_m_s2 * below
+    return float(np.sum(lengths * (1.0 + t / ea))), float(np.sum(lengths * (1.0 + (t + tip_pull_N) / ea)))
+
+
+def _rotation(axis, angle):
+    """Rodrigues' rotation matrix by ``angle`` about the unit vector ``axis``."""
+    k = np.asarray(axis, float)
+    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * kx + (1.0 - math.cos(angle)) * (kx @ kx)
+
+
+#: The continuation in the hold angle (docs/catenary.md 3.2): the first step is this fraction of
+#: the way from the horizontal hold to the one asked; a step that fails is halved, down to
+#: CONTINUATION_MIN_STEP of the way, after which the branch is taken to end there (a fold: measured
+#: at 8-16 rods, EA 1e3 N, the taut branch from the horizontal turns back 2-6 deg off the vertical,
+#: the steps shrinking there); each step's Newton
+#: gets CONTINUATION_ITERATIONS iterations (from the neighbouring solution it needs 2-6).
+CONTINUATION_FIRST_STEP = 0.25
+CONTINUATION_MIN_STEP = 1e-3
+CONTINUATION_ITERATIONS = 8
+#: ... and the whole continuation at most this many attempted steps (each an O(n^2) Jacobian or more)
+CONTINUATION_MAX_ATTEMPTS = 40
+#: Off switch of the continuation: the negative control of the range tests (tests/test_statics_range.py)
+CONTINUATION = True
+
+
+def _hold_plane(span, down):
+    """(unit down g, unit side e, angle of ``span`` from g in [0, pi]) of the vertical plane of a
+    hold; on the line of ``down`` the side is the direction of x (or y) across it."""
+    g = np.asarray(down, float) / float(np.linalg.norm(down))
+    side = span - (span @ g) * g
+    if np.linalg.norm(side) <= 1e-12 * np.linalg.norm(span):
+        side = np.array([1.0, 0.0, 0.0]) if abs(g[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        side = side - (side @ g) * g
+    side = side / np.linalg.norm(side)
+    return g, side, math.atan2(float(span @ side), float(span @ g))
+
+
+def _continue_hold_angle(attempt, taut, x_start, span, down, n):
+    """Continuation in the hold angle at the asked distance: from a solution ``x_start`` of the
+    horizontal hold, rotate the hold in its vertical plane towards the one asked, each step's rods
+    rotated with it as the next start (``attempt(chord, x)`` -> x or raises _NoConvergence);
+    ``taut(x)``: every rod in tension.  Returns (x, steps, iterations) at the asked hold, or raises
+    _NoConvergence naming the last angle reached with every rod taut."""
+    g, side, target = _hold_plane(span, down)
+    s = float(np.linalg.norm(span))
+    axis = np.cross(g, side)
+    theta = 0.5 * math.pi
+    x = x_start
+    step = CONTINUATION_FIRST_STEP * (target - theta)
+    steps = 0
+    iterations = 0
+    attempts = 0
+    while theta != target:
+        attempts += 1
+        if attempts > CONTINUATION_MAX_ATTEMPTS:
+            raise _NoConvergence(
+                f"continuation in the hold angle from the horizontal reached {math.degrees(theta):.4g} deg off the line "
+                f"of the load with every rod taut in {CONTINUATION_MAX_ATTEMPTS} steps, and stopped there")
+        if abs(step) < CONTINUATION_MIN_STEP * abs(target - 0.5 * math.pi):
+            raise _NoConvergence(
+                f"continuation in the hold angle from the horizontal kept every rod taut down to "
+                f"{math.degrees(theta):.4g} deg off the line of the load and no further")
+        nxt = target if abs(target - theta) <= abs(step) else theta + step
+        rot = _rotation(axis, nxt - theta)
+        xg = x.copy()
+        xg[: 3 * n] = (x[: 3 * n].reshape(n, 3) @ rot.T).ravel()
+        chord = span if nxt == target else s * (math.cos(nxt) * g + math.sin(nxt) * side)
+        try:
+            xn, it = attempt(chord, xg)
+        except (_NoConvergence, np.linalg.LinAlgError):
+            step *= 0.5
+            continue
+        iterations += it
+        if not taut(xn):  # the branch found passes through a rod without tension: not ours
+            step *= 0.5
+            continue
+        x, theta = xn, nxt
+        steps += 1
+        step *= 1.5
+    return x, steps, iterations
+
+
 def _fd_jacobian(evaluate, x, f):
     """Forward differences in scaled units: 1e-7 of a rod's size, or of the 0.1 %-strain force."""
     jac = np.empty((x.size, x.size))
@@ -409,6 +517,77 @@ def _trust_newton(evaluate, x, f, converged, max_iter):
     raise _NoConvergence(f"no convergence in {max_iter} trust-region Newton iterations")
 
 
+def _refusal_lengths(uniform, tether, model, ea_rods, span, down, n):
+    """(span, hang length, free-hang length, proven) of a hold under uniform loads (None
+    otherwise, or for one rod, whose vector is the chord): ``proven`` when the hold is on the line
+    of the load, below the root, nearer than the hang length.  On that line a taut chain is
+    straight (its rods' directions -(J_{i-1} + J_i) have no component across the load) and each
+    rod carries at least the weight below its centre, so it is at least ``hang`` long; a chain
+    that folds back has a rod at the fold with J_{i-1} + J_i = 0, i.e. no tension (section 3.2)."""
+    if uniform is None or n < 2:
+        return None
+    g_vec, tip_force = uniform
+    g = float(np.linalg.norm(g_vec))
+    if not g > 0.0:
+        return None
+    g_hat = g_vec / g
+    pull = tether.tip_mass_kg * g + float(tip_force @ g_hat)
+    hang, free = hang_lengths(model.rod_lengths(), model.rod_masses(), ea_rods, g, max(pull, 0.0))
+    s = float(np.linalg.norm(span))
+    across = float(np.linalg.norm(span - (span @ g_hat) * g_hat))
+    proven = across <= 1e-12 * s and float(span @ g_hat) > 0.0 and s < hang
+    return s, hang, free, proven
+
+
+def _refusal_text(refusal, span, down, why):
+    """The message of a NoTautEquilibrium: the hold asked, the hang lengths, and why."""
+    s = float(np.linalg.norm(span))
+    g_hat = np.asarray(down, float) / float(np.linalg.norm(down))
+    off = math.degrees(math.acos(max(-1.0, min(1.0, float(span @ g_hat) / s))))
+    found = "exists" if refusal is not None and refusal[3] else "was found"
+    text = f"no equilibrium with every rod in tension {found}: the end mass held {s:.9g} m from the root, {off:.4g} deg off the downward vertical"
+    if refusal is not None and refusal[1] is not None:
+        text += (f"; hanging under its own weight with nothing pulling its end the tether is {refusal[1]:.9g} m long "
+                 f"({refusal[2]:.9g} m with the end mass hanging free)")
+        if refusal[3]:
+            return text + ": held on the vertical, a taut tether needs at least that distance; hold the end mass at least that far, or off the vertical"
+        if s < refusal[1]:
+            text += ": the extra length must hang as a loop below the end mass, and none was found"
+    return text + (f" ({why})" if why else "") + "; move the end mass further from the root or further off the vertical"
+
+
+def _horizontal_start(attempt, taut, evaluate, converged, unknowns, span, down, r0, total, n,
+                      uniform, tether, model, masses, ea_rods, f_scale, max_iter):
+    """A taut equilibrium of the hold at the asked distance, horizontal in the asked hold's
+    vertical plane: the continuation's start.  Newton from the sagging guess, else the shooting
+    (uniform loads), polished by the trust region.  Returns (x, iterations)."""
+    g, side, _ = _hold_plane(span, down)
+    s = float(np.linalg.norm(span))
+    chord = s * side
+    span[:] = chord
+    x0 = unknowns(sagging_guess(r0, r0 + chord, total, n, g))
+    f0 = evaluate(x0)
+    if f0 is not None:
+        try:
+            x, _, it = _plain_newton(evaluate, x0, f0, converged, max_iter)
+            if taut(x):
+                return x, it
+        except (_NoConvergence, np.linalg.LinAlgError):
+            pass
+    if uniform is None:
+        raise _NoConvergence("no taut equilibrium of the horizontal hold to start the continuation from")
+    tip_load = uniform[1] + tether.tip_mass_kg * uniform[0]
+    shot = shot_joints(r0, r0 + chord, model.rod_lengths(), masses, ea_rods, uniform[0], tip_load)
+    if shot is None:
+        raise _NoConvergence("the horizontal hold has no discrete catenary to start the continuation from")
+    xs = unknowns(shot[0])
+    xs[3 * n :] = -(shot[1] + tip_load) / f_scale
+    x, it = attempt(chord, xs)
+    if not taut(x):
+        raise _NoConvergence("the horizontal hold's equilibrium has a rod in compression")
+    return x, it
+
+
 def solve(
     model: Model,
     root_m,
@@ -418,6 +597,7 @@ def solve(
     guess_joints: np.ndarray | None = None,
     force_tol_N: float | None = None,
     max_iter: int = 60,
+    taut_only: bool = True,
 ) -> Equilibrium:
     """Static equilibrium with the root at ``root_m`` and the end mass held at ``tip_m``.
 
@@ -431,6 +611,11 @@ def solve(
     found by shooting on three unknowns (:func:`shot_joints`) is the start of a Newton iteration
     globalised by a trust region (:func:`_trust_newton`), which meets the same tolerances on the
     model's own equations (docs/catenary.md section 3.1).
+
+    ``taut_only`` (n > 1): refuse a hold with no equilibrium with every rod in tension
+    (:class:`NoTautEquilibrium`, section 3.2), after a continuation in the hold angle; False keeps
+    the strut Newton converged to (the elastic stand-in of an inextensible tether, whose start
+    restores the rods' lengths: straight on the vertical at its length).
     """
     if not model.root_fixed:
         raise ValueError("model.root_fixed: expected True (a fixed root, the nail), got False")
@@ -491,6 +676,11 @@ def solve(
             return None
         rs = ParamView(p).rod_scratch
         return rs.r1[:n] + rs.r2[:n], ParamView(p).body_scratch.f_eff[1, :3].copy()
+
+    uniform = _uniform_loads(p, slot)
+    refusal = _refusal_lengths(uniform, tether, model, ea_rods, span, down, n) if guess_joints is None and taut_only else None
+    if refusal is not None and refusal[3]:
+        raise NoTautEquilibrium(_refusal_text(refusal, span, down, None), *refusal)
 
     joints = sagging_guess(r0, rf, total, n, down) if guess_joints is None else np.asarray(guess_joints, float)
     if joints.shape != (n + 1, 3):
@@ -560,8 +750,38 @@ def solve(
                 except (_NoConvergence, np.linalg.LinAlgError):
                     x = None
         first_error = str(first)
+    if first_error is not None and x is None and guess_joints is None and n > 1 and (taut_only or newton_x is None):
+        # the globalisation: continuation in the hold angle from the horizontal (section 3.2)
+        why = "the continuation is switched off"
+        if CONTINUATION:
+            def attempt(chord, xg):
+                span[:] = chord
+                fg = evaluate(xg)
+                if fg is None:
+                    raise _NoConvergence("a rod collapsed")
+                xn, _, k = _trust_newton(evaluate, xg, fg, converged, CONTINUATION_ITERATIONS)
+                return xn, k
+
+            def taut(xt):
+                evaluate(xt)
+                return float(ParamView(p).rod_scratch.fe[:n].min()) > 0.0
+
+            try:
+                x_h, it_h = _horizontal_start(attempt, taut, evaluate, converged, unknowns, span, down, r0, total, n,
+                                              uniform, tether, model, masses, ea_rods, f_scale, max_iter)
+                x, steps, it_c = _continue_hold_angle(attempt, taut, x_h, rf - r0, down, n)
+                it = it_h + it_c
+                method = "continuation"
+            except (_NoConvergence, np.linalg.LinAlgError) as exc:
+                x = None
+                why = str(exc)
+            finally:
+                span[:] = rf - r0
+        if x is None:
+            refusal = refusal or (None, None, None, False)
+            raise NoTautEquilibrium(_refusal_text(refusal, span, down, why), float(np.linalg.norm(span)), *refusal[1:])
     if first_error is not None and x is None and newton_x is not None:
-        x = newton_x  # no tensioned equilibrium found: the strut it is (a single rod too short, say)
+        x = newton_x  # one rod, or a strut asked for (taut_only False)
         method = "newton"
     if first_error is not None and x is None:
         why = (

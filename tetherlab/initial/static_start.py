@@ -17,7 +17,7 @@ def static_start(scene, root, tethers, specs, effects, central, nq, y0):
     (docs/catenary.md).  Returns (y0, R_f).  A solve that fails is refused here: only solving
     tells.
     """
-    from ..statics import held_model, solve
+    from ..statics import NoTautEquilibrium, held_model, solve
 
     t = tethers[0]
     path = f"tethers.{t.name}.initial.shape"
@@ -36,7 +36,14 @@ def static_start(scene, root, tethers, specs, effects, central, nq, y0):
         raise SceneError(where, f"an end mass within the inextensible tether's length {specs[0].length_m:g} m of its root",
                          f"{reach:.9g} m from the root")  # fmt: skip
     try:
-        eq = solve(held, r0, tip_r, down=down)
+        # an inextensible tether's start restores its rods' lengths: a strut of the elastic
+        # stand-in on the vertical at the tether's length becomes the straight, taut chain
+        eq = solve(held, r0, tip_r, down=down, taut_only=specs[0].model != "inextensible")
+    except NoTautEquilibrium as exc:
+        # a tether does not push: where no taut equilibrium holds the end mass, its placement,
+        # not the solver, is what the user can change
+        raise SceneError(where, "an end mass placed where the tether hangs with every rod taut",
+                         f"{reach:.9g} m from the root: {exc}") from None  # fmt: skip
     except ValueError as exc:
         if specs[0].tension_only:  # the placement, not the solver, is what the user can change
             raise SceneError(where, "an end mass placed where the tension-only tether hangs with every rod taut",
