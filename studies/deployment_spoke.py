@@ -72,11 +72,15 @@ def spoke_scene(*, n_tethers=4, duration="300 s", count=301, control=False, lag=
     })  # fmt: skip
 
 
+AXIS_RHO_KG_M, AXIS_STORED_M, AXIS_SPOOL_R = 0.05, 2000.0, 0.5  # kg/m, m, m
+
+
 def axis_spoke_scene(*, duration="120 s", count=121):
-    """Two spokes along the spin axis: the hub of spoke_scene pays out two tethers along +z and -z
-    from exits at (0, 0, +-0.5) m (canister rings of 0.3 m about z, 500 m stored each), under the
-    spool law from 2 m/s against viscous brakes of 0.05 and 0.1 N s/m (different, so the two
-    lengths differ), to 5 kg end masses on the axis moving out at 2 m/s; no wheels."""
+    """Two spokes along the spin axis: the hub of spoke_scene pays out two 50 g/m tethers along +z
+    and -z from exits at (0, 0, +-0.5) m (canister rings of 0.5 m about z, 2 km stored each: 100 kg,
+    m_s R_s^2 = 25 kg m^2 against J_zz = 600), rods of 25 m, under the spool law from 2 m/s against
+    viscous brakes of 0.05 and 0.1 N s/m (different, so the two lengths differ), to 5 kg end
+    masses on the axis moving out at 2 m/s; no wheels."""
     w = SPIN_RAD_S
     bodies = {"hub": {"mass": f"{HUB_KG} kg", "position": ["0 m", "0 m", "0 m"], "velocity": ["0 m/s", "0 m/s", "0 m/s"],
                       "rigid": {"inertia": {"xx": f"{J_XX} kg m2", "yy": f"{J_XX} kg m2", "zz": f"{J_ZZ} kg m2"},
@@ -86,11 +90,11 @@ def axis_spoke_scene(*, duration="120 s", count=121):
     for k, (sgn, brake) in enumerate(((1.0, 0.05), (-1.0, 0.1))):
         bodies[f"a{k}"] = {"mass": f"{END_KG} kg", "position": ["0 m", "0 m", f"{sgn * (EXIT_R + L0_M)} m"],
                            "velocity": ["0 m/s", "0 m/s", f"{sgn * 2.0} m/s"]}  # fmt: skip
-        reel = {"law": "spool", "speed": "2 m/s", "rod_length": "10 m", "stored_length": f"{STORED_M} m",
+        reel = {"law": "spool", "speed": "2 m/s", "rod_length": "25 m", "stored_length": f"{AXIS_STORED_M} m",
                 "exit": "canister", "point": ["0 m", "0 m", f"{sgn * EXIT_R} m"], "exit_direction": [0, 0, sgn],
-                "spool_radius": f"{SPOOL_R} m", "viscous_friction": f"{brake} N s/m"}  # fmt: skip
+                "spool_radius": f"{AXIS_SPOOL_R} m", "viscous_friction": f"{brake} N s/m"}  # fmt: skip
         tethers[f"z{k}"] = {"from": "hub", "from_point": reel["point"], "to": f"a{k}", "length": f"{L0_M} m",
-                            "EA": f"{EA_N} N", "linear_density": f"{RHO_KG_M} kg/m", "model": "energy", "reel": reel}  # fmt: skip
+                            "EA": f"{EA_N} N", "linear_density": f"{AXIS_RHO_KG_M} kg/m", "model": "energy", "reel": reel}  # fmt: skip
     return Scene.from_dict({
         "name": "hub-spoke-axis", "duration": duration, "effects": {}, "bodies": bodies, "tethers": tethers,
         "integrator": {"method": "dop853", "rtol": SPOKE_RTOL, "atol": 1e-10}, "output": {"count": count},
@@ -111,9 +115,9 @@ def run_frames(run):
 def axis_spin_closed_form(reels, omega0=SPIN_RAD_S):
     """omega_z = omega_0 (J_zz + sum m_s,k(0) R_s^2) / (J_zz + sum m_s,k(t) R_s^2), the stored masses
     from the run's own deployed lengths (docs/deployment.md 9.5)."""
-    stored = sum(RHO_KG_M * (STORED_M + L0_M - r["deployed_length_m"].to_numpy()) for r in reels.values())
-    stored0 = len(reels) * RHO_KG_M * STORED_M
-    r2 = SPOOL_R**2
+    stored = sum(AXIS_RHO_KG_M * (AXIS_STORED_M + L0_M - r["deployed_length_m"].to_numpy()) for r in reels.values())
+    stored0 = len(reels) * AXIS_RHO_KG_M * AXIS_STORED_M
+    r2 = AXIS_SPOOL_R**2
     return omega0 * (J_ZZ + stored0 * r2) / (J_ZZ + stored * r2)
 
 
@@ -143,11 +147,21 @@ def _vec(inv, kind):
     return inv[cols].to_numpy()
 
 
+def _momentum_error(run):
+    """(max_t |P(t) - P(0)|, 100 rtol sqrt(2 M K_max)): the momentum's drift and its bound (part H's,
+    M the whole system's mass)."""
+    P = _vec(run.invariants, "P")
+    n = len(run.reel["reel"].unique())
+    mass = HUB_KG + n * (END_KG + RHO_KG_M * (STORED_M + L0_M))
+    scale = math.sqrt(2.0 * mass * float(run.invariants["kinetic_J"].max()))
+    return float(np.abs(P - P[0]).max()), 100.0 * SPOKE_RTOL * scale
+
+
 def part_spokes():
     """P: the gates (the spin-up along the axis against its closed form; the angular momentum of the
     radial spokes with the PD controller's wheels) with their controls, and the runs of the figure."""
     from tetherlab.deployment import simulate_reel
-    from tetherlab.model.params import DEFECT_REEL_RING_FULL, DEFECT_WHEELS_NO_GYRO
+    from tetherlab.model.params import DEFECT_REEL_ONE_STORED, DEFECT_REEL_RING_FULL, DEFECT_WHEELS_NO_GYRO
 
     axis = simulate_reel(axis_spoke_scene(), progress=False)
     if not axis.ok:
@@ -162,6 +176,8 @@ def part_spokes():
         raise RuntimeError(f"part P (PD): {pd.message}")
     pd_c = simulate_reel(spoke_scene(control=True), defect=DEFECT_WHEELS_NO_GYRO, raise_on_failure=False, progress=False)
     free = simulate_reel(spoke_scene(), progress=False)
+    lag = simulate_reel(spoke_scene(lag=3.0), progress=False)
+    lag_c = simulate_reel(spoke_scene(lag=3.0), defect=DEFECT_REEL_ONE_STORED, raise_on_failure=False, progress=False)
     rows = [
         {"case": "P two spokes on the spin axis: |omega_z - closed form|", "value": err, "bound": bound,
          "over bound": err / bound, "unit": "rad/s",
@@ -171,16 +187,26 @@ def part_spokes():
     ]  # fmt: skip
     gates = {"deployment_spoke_axis_spin_over_bound": err / bound,
              "deployment_spoke_ring_full_negative_control": bound / c_err if c_err > 0 else math.inf}
-    h_worst = 0.0
-    for label, run in (("PD-held hub, 3 wheels", pd), ("free wheel", free)):
+    h_worst, p_worst = 0.0, 0.0
+    for label, run in (("PD-held hub, 3 wheels", pd), ("free wheel", free), ("one spoke lagging, free wheel", lag)):
         if not run.ok:
             raise RuntimeError(f"part P ({label}): {run.message}")
         H = _vec(run.invariants, "H")
         h_err, h_bound = float(np.abs(H - H[0]).max()), 100.0 * SPOKE_RTOL * float(np.linalg.norm(H[0]))
         h_worst = max(h_worst, h_err / h_bound)
+        p_err, p_bound = _momentum_error(run)
+        p_worst = max(p_worst, p_err / p_bound)
         rows.append({"case": f"P four radial spokes, {label}: angular momentum |H(t) - H(0)|", "value": h_err,
                      "bound": h_bound, "over bound": h_err / h_bound, "unit": "kg m^2/s",
                      "note": f"{len(run.changes)} births; |H(0)| = {np.linalg.norm(H[0]):.5g} kg m^2/s (wheels included)"})  # fmt: skip
+        rows.append({"case": f"P four radial spokes, {label}: momentum |P(t) - P(0)|", "value": p_err,
+                     "bound": p_bound, "over bound": p_err / p_bound, "unit": "N s", "note": "bound 100 rtol sqrt(2 M K_max)"})  # fmt: skip
+    pc_err = _momentum_error(lag_c)[0] if lag_c.invariants.shape[0] > 1 else math.inf
+    pc_bound = _momentum_error(lag)[1]
+    rows.append({"case": "control: the hub's mass with one reel's stored line only, one spoke lagging", "value": pc_err,
+                 "bound": pc_bound, "over bound": pc_err / pc_bound, "unit": "N s", "note": "must exceed its bound"})  # fmt: skip
+    gates["deployment_spoke_momentum_over_bound"] = p_worst
+    gates["deployment_spoke_one_stored_negative_control"] = pc_bound / pc_err if pc_err > 0 else math.inf
     Hc = _vec(pd_c.invariants, "H") if pd_c.invariants.shape[0] > 1 else None
     H0 = _vec(pd.invariants, "H")
     hc_bound = 100.0 * SPOKE_RTOL * float(np.linalg.norm(H0[0]))
@@ -190,7 +216,7 @@ def part_spokes():
     gates["deployment_spoke_angular_momentum_over_bound"] = h_worst
     gates["deployment_spoke_wheels_negative_control"] = hc_bound / hc_err if hc_err > 0 else math.inf
     return rows, gates, {"axis": (t, w, cf), "axis_ctrl": axis_errors(axis_c)[:3] if len(axis_c.phases) else None,
-                         "pd": pd, "free": free, "pd_ctrl": pd_c, "h_bound": hc_bound}  # fmt: skip
+                         "pd": pd, "free": free, "lag": lag, "pd_ctrl": pd_c, "h_bound": hc_bound}  # fmt: skip
 
 
 def part_lag():
@@ -198,7 +224,7 @@ def part_lag():
     with the PD controller: measured, not gated (docs/deployment.md 9.5)."""
     from tetherlab.deployment import simulate_reel
 
-    lag = simulate_reel(spoke_scene(lag=3.0), progress=False)
+    lag = simulate_reel(spoke_scene(lag=3.0), progress=False)  # (P runs it too; a part runs alone)
     lag_pd = simulate_reel(spoke_scene(lag=3.0, control=True), progress=False)
     rows = []
     for label, run in (("wheel free", lag), ("PD-held", lag_pd)):

@@ -392,6 +392,16 @@ MUTANTS = {
             path="reel",
         ),
         Mutant(
+            "reel_one_stored",
+            "a body carrying several reels whose mass counts only one reel's stored tether (each reel "
+            "overwriting the body's mass with its dry mass plus its own stored line)",
+            "tether/reel.py reel_update (p[H_MUTANT] = DEFECT_REEL_ONE_STORED)",
+            "docs/deployment.md 9.5 (the hub's mass is its own plus every reel's stored tether)",
+            ("deployment_spoke_momentum_over_bound", "deployment_spoke_one_stored_negative_control"),
+            mutate=_flag(L.DEFECT_REEL_ONE_STORED),
+            path="reel",
+        ),
+        Mutant(
             "spool_uncoupled",
             "the spool's L'' solved with the exit tension taken at L'' = 0 (its coupling through the first "
             "rod's apparent load dropped)",

@@ -43,6 +43,7 @@ DEFECT_SPOOL_NO_SPEED_BRAKE = 31    # the spool's balance without the regulating
 DEFECT_INEXT_NO_VSQ = 41          # the inextensible rod's constraint without |d'|^2 in kappa (tether/inextensible.py)
 DEFECT_WHEELS_NO_GYRO = 42        # a rigid body's gyroscopic torque without its wheels' momentum: omega x J_s omega only (bodies/rigid_body.py)
 DEFECT_REEL_RING_FULL = 43        # a reel on a rigid body whose stored ring keeps the full line's inertia as it pays out (tether/reel_hub.py)
+DEFECT_REEL_ONE_STORED = 44       # a body with several reels whose mass counts only the last reel's stored tether (tether/reel.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 
