@@ -98,10 +98,11 @@ def _jumps(run):
 
 @pytest.mark.parametrize("law", ["constant", "spool"])
 def test_retirements_on_a_rigid_hub_keep_both_momenta(law):
-    # hauling 150 m in at 2 m/s (the constant law) or under a motor of -0.1 N m on the spool from
-    # -2 m/s: the rod at the reel is retired below 12.5 m
+    # hauling in at 2 m/s for 40 s (the constant law), or from -2 m/s under a motor of 3 N m on a
+    # 0.3 m arm (10 N against the end mass's ~4 N) with a viscous friction of 2 N s/m (the spool
+    # law: 150 -> 108 m): the rod at the reel is retired below 12.5 m
     reel = {"speed": "-2 m/s"} if law == "constant" else {
-        "law": "spool", "speed": "-2 m/s", "drum_radius": "0.3 m", "torque": "0.1 N m"}
+        "law": "spool", "speed": "-2 m/s", "drum_radius": "0.3 m", "torque": "3 N m", "viscous_friction": "2 N s/m"}
     run = simulate_reel(_scene(reel=reel), progress=False)
     assert run.ok, run.message
     kinds = [c["change"] for c in run.changes]
