@@ -65,6 +65,15 @@ N. Part L's constant-speed retrieval against the reeled pendulum (tetherlab/orac
    the field's P3 term, the line's inertia, its sag, its strain, each through the linearised
    pendulum's response, plus twice the run's difference from the same run at a tenth of its rtol).
    Control: a kernel that ignores the law (DEFECT_REEL_FROZEN).
+P. Hub-and-spoke from a 500 kg hub spinning at 1 rpm under spool laws (studies/deployment_spoke.py,
+   docs/deployment.md 9.5): two spokes along the spin axis against the closed form omega_0 (J_zz +
+   sum m_s(0) R_s^2) / (J_zz + sum m_s(t) R_s^2) within 100 rtol omega_0 (control: the ring's inertia
+   kept full, DEFECT_REEL_RING_FULL); four radial spokes with a free wheel and with three wheels
+   under the PD controller, total angular momentum (wheels included) within 100 rtol |H(0)|
+   (control: the wheels' momentum left out of the hub's gyroscopic torque, DEFECT_WHEELS_NO_GYRO);
+   the spin rate against the rigid-body estimate H_z / I_z(L) in a figure.
+Q. One spoke lagging (its brake 3x): the nutation and the hub's drift, with and without the PD
+   controller; measured, not gated.
 
     PYTHONPATH=. python studies/deployment.py OUTDIR [--quiet]
 """
@@ -90,6 +99,7 @@ from tetherlab.pipeline import prepare  # noqa: E402
 from tetherlab.scene import Scene  # noqa: E402
 
 from studies.deployment_hub import hub_figure, part_hub  # noqa: E402
+from studies.deployment_spoke import part_lag, part_spokes, spoke_figure  # noqa: E402
 
 EPS = float(np.finfo(float).eps)
 MU = 3.986004418e14  # m^3/s^2, the scene preset "earth" (tetherlab/scene/data.py)
@@ -936,6 +946,15 @@ def hub_figures(out: Path, hub) -> list[str]:
     return hub_figure(out, hub, plt)
 
 
+def spoke_figures(out: Path, spokes, lag) -> list[str]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return spoke_figure(out, spokes, lag, plt)
+
+
 def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) -> None:
     from tetherlab.report import table
 
@@ -985,7 +1004,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir", type=Path)
     ap.add_argument("--quiet", action="store_true")
-    ap.add_argument("--parts", default="ABCDEFGHIJKLMN", help="parts to run (A and C run together)")
+    ap.add_argument("--parts", default="ABCDEFGHIJKLMNPQ", help="parts to run (A and C run together)")
     args = ap.parse_args(argv)
     out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
@@ -1013,7 +1032,7 @@ def main(argv=None) -> int:
     for name, part in (("B", lambda: (*part_birth(), None)), ("D", part_retire), ("E", part_exponential),
                        ("F", part_retrieval), ("G", part_convergence), ("H", part_hub), ("I", part_spool),
                        ("J", part_seds), ("K", part_yes2), ("L", part_retrieval_law), ("M", part_limits),
-                       ("N", part_retrieval_pendulum)):  # fmt: skip
+                       ("N", part_retrieval_pendulum), ("P", part_spokes), ("Q", part_lag)):  # fmt: skip
         if name in args.parts:
             run_part(name, part)
     free = found.get("A+C")
@@ -1024,6 +1043,7 @@ def main(argv=None) -> int:
         gates["deployment_rescaled_negative_control"] = 1.0 / control if control > 0 else math.inf
     figs = figures(out, free, found.get("E"), found.get("F")) + spool_figures(out, found.get("I"), found.get("J"))
     figs += hub_figures(out, found.get("H"))
+    figs += spoke_figures(out, found.get("P"), found.get("Q"))
     figs += scene_figures(out, found.get("K"), found.get("L"))
     summary = {"gates": gates, "failures": failures, "wall_s": walls}
     (out / "deployment_summary.json").write_text(json.dumps(summary, indent=1) + "\n")

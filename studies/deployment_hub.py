@@ -1,4 +1,4 @@
-"""Part G of the deployment study: deployment from a spinning rigid hub with a wheel (docs/deployment.md 9).
+"""Part H of the deployment study: deployment from a spinning rigid hub with a wheel (docs/deployment.md 9).
 
 A 200 kg hub (J = diag(40, 50, 60) kg m^2) spinning at 0.05 rad/s about its z axis (and 0.01 rad/s
 about x), a wheel on its y axis free at 300 rpm, pays out 150 m of line (10 g/m, EA 2 kN, rods of

@@ -73,6 +73,10 @@ def test_every_gate_has_a_probe_or_a_reason_to_have_none():
                 "deployment_hub_energy_over_bound", "deployment_hub_exit_torque_negative_control",
                 "deployment_hub_centripetal_negative_control", "deployment_hub_axis_spin_over_bound",
                 "deployment_hub_ring_negative_control",
+                # and the hub-and-spoke's three (part P, studies/deployment_spoke.py)
+                "deployment_spoke_axis_spin_over_bound", "deployment_spoke_ring_full_negative_control",
+                "deployment_spoke_angular_momentum_over_bound", "deployment_spoke_wheels_negative_control",
+                "deployment_spoke_momentum_over_bound", "deployment_spoke_one_stored_negative_control",
                 # and the spool's two (part I)
                 "deployment_spool_drum_over_budget", "deployment_spool_energy_over_bound",
                 "deployment_tension_roots_over_budget", "deployment_spool_uncoupled_negative_control",

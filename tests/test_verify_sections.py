@@ -124,14 +124,14 @@ def test_deployment_section_measures_every_deployment_gate(tmp_path):
     sections, values, failures = verify.run_studies(tmp_path, ["deployment"])
     assert failures == [] and [s[0] for s in sections] == ["deployment"]
     wanted = {g for g in gates if g.startswith("deployment_")}
-    assert len(wanted) == 34 and wanted <= set(values)
+    assert len(wanted) == 40 and wanted <= set(values)
     for g in wanted:
         assert values[g] is not None and values[g] <= gates[g]["threshold"], (g, values[g])
         assert verify.gate_section(g) == "study-deployment"
     md = sections[0][2]
     for fig in ("deployment_length_rods", "deployment_momentum", "deployment_exponential_angle",
                 "deployment_retrieval_invariant", "deployment_spool", "deployment_seds",
-                "deployment_hub_attitude"):
+                "deployment_hub_attitude", "deployment_spoke_attitude"):
         assert f"(deployment/{fig}.png)" in md and (tmp_path / "deployment" / f"{fig}.png").is_file()
 
 

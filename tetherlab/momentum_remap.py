@@ -42,9 +42,12 @@ def momenta(model, t_s: float, Y: np.ndarray) -> np.ndarray:
 def rigid_increment(model, y: np.ndarray, a: np.ndarray, omega: np.ndarray, c: np.ndarray,
                     pos: np.ndarray | None = None) -> np.ndarray:
     """y with the velocity increment a + omega x (r - c) of a rigid motion applied to every root
-    body and, through the rod rates d' += omega x d, to every joint hanging from it (rigid
-    bodies keep their attitude states; their translation takes the increment).  ``pos``: the
-    bodies' positions of y (system.point_positions "bodies"), when the caller has them (the six
+    body and, through the rod rates d' += omega x d, to every joint hanging from it; every rigid
+    body's angular velocity takes omega too (its body-axes rate R^T omega; the wheels' rates are
+    relative to their body and stay), so that the material of a rigid body, its stored tether
+    included, moves with the same rigid increment as the rest (docs/deployment.md 6.3: without
+    it the constraints are still met, but not by the least change of kinetic energy).  ``pos``:
+    the bodies' positions of y (system.point_positions "bodies"), when the caller has them (the six
     columns of one solve share them: the increment changes velocities only)."""
     lay = model.state
     z = np.array(y, float)
@@ -56,7 +59,19 @@ def rigid_increment(model, y: np.ndarray, a: np.ndarray, omega: np.ndarray, c: n
         z[lay.root_velocity(b)] += a + np.cross(omega, pos[b, :3] - c)
     # every rod at once (the same products as one rod at a time)
     z[lay.rods_dd] += np.cross(omega, y[lay.rods_d].reshape(-1, 3)).ravel()
+    for b, _ in lay.rigid:
+        z[lay.omega_of(b)] += _body_to_inertial(y[lay.quaternion_of(b)]).T @ omega
     return z
+
+
+def _body_to_inertial(q: np.ndarray) -> np.ndarray:
+    """R(q/|q|), body -> inertial, scalar first (as bodies/rigid.rotation)."""
+    w, x, y_, z = np.asarray(q, float) / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y_ * y_ + z * z), 2 * (x * y_ - w * z), 2 * (x * z + w * y_)],
+        [2 * (x * y_ + w * z), 1 - 2 * (x * x + z * z), 2 * (y_ * z - w * x)],
+        [2 * (x * z - w * y_), 2 * (y_ * z + w * x), 1 - 2 * (x * x + y_ * y_)],
+    ])  # fmt: skip
 
 
 def _roots(model) -> list[int]:

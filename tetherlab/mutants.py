@@ -392,6 +392,36 @@ MUTANTS = {
             path="reel",
         ),
         Mutant(
+            "wheels_gyro_dropped",
+            "a rigid body's gyroscopic torque without its wheels' momentum: omega x J_s omega in place of "
+            "omega x (J_s omega + h_w)",
+            "bodies/rigid_body.py rigid_setup (p[H_MUTANT] = DEFECT_WHEELS_NO_GYRO)",
+            "paper eq. 46; docs/deployment.md 9.5 (the spinning hub's angular momentum with its wheels)",
+            ("deployment_spoke_angular_momentum_over_bound", "deployment_spoke_wheels_negative_control"),
+            mutate=_flag(L.DEFECT_WHEELS_NO_GYRO),
+            path="reel",
+        ),
+        Mutant(
+            "reel_hub_ring_full",
+            "a reel on a rigid body whose stored ring keeps the inertia of the full line, m_s K with "
+            "m_s = rho line, as the line pays out (its first moment and the ring's term still shrink)",
+            "tether/reel_hub.py reel_hub_terms (p[H_MUTANT] = DEFECT_REEL_RING_FULL)",
+            "docs/deployment.md 9.5 (the spokes' spin-up along the axis, closed form)",
+            ("deployment_spoke_axis_spin_over_bound", "deployment_spoke_ring_full_negative_control"),
+            mutate=_flag(L.DEFECT_REEL_RING_FULL),
+            path="reel",
+        ),
+        Mutant(
+            "reel_one_stored",
+            "a body carrying several reels whose mass counts only one reel's stored tether (each reel "
+            "overwriting the body's mass with its dry mass plus its own stored line)",
+            "tether/reel.py reel_update (p[H_MUTANT] = DEFECT_REEL_ONE_STORED)",
+            "docs/deployment.md 9.5 (the hub's mass is its own plus every reel's stored tether)",
+            ("deployment_spoke_momentum_over_bound", "deployment_spoke_one_stored_negative_control"),
+            mutate=_flag(L.DEFECT_REEL_ONE_STORED),
+            path="reel",
+        ),
+        Mutant(
             "spool_uncoupled",
             "the spool's L'' solved with the exit tension taken at L'' = 0 (its coupling through the first "
             "rod's apparent load dropped)",

@@ -52,6 +52,7 @@ from ..kernel.layout import (
     BT_W0,
     DEFECT_NO_CENTRIPETAL,
     DEFECT_UNROTATED_ATTACHMENT,
+    DEFECT_WHEELS_NO_GYRO,
     H_DEFECT,
     H_MU_GG,
     H_NBODY,
@@ -156,6 +157,10 @@ def rigid_setup(t, att, p, b, datt):
     )
     js = bt + BT_JS
     jx, jy, jz = mat_vec(p, js, wbx, wby, wbz)
+    if int(p[H_DEFECT]) == DEFECT_WHEELS_NO_GYRO:  # the negative control of the wheels' share (0 in user runs)
+        hwx = 0.0
+        hwy = 0.0
+        hwz = 0.0
     gx, gy, gz = cross(wbx, wby, wbz, jx + hwx, jy + hwy, jz + hwz)
     mgx = 0.0
     mgy = 0.0

@@ -42,6 +42,9 @@ DEFECT_SPOOL_TORQUE_UNLIMITED = 30  # the spool's balance with the motor's unlim
 DEFECT_SPOOL_NO_SPEED_BRAKE = 31    # the spool's balance without the regulating brake, its outputs with it (tether/reel_spool.py)
 DEFECT_SPOOL_TORQUE_ONE_SIDED = 45  # the motor's torque limit with its upper corner dropped: bent above -tau_max only (tether/reel_spool.py)
 DEFECT_INEXT_NO_VSQ = 41          # the inextensible rod's constraint without |d'|^2 in kappa (tether/inextensible.py)
+DEFECT_WHEELS_NO_GYRO = 42        # a rigid body's gyroscopic torque without its wheels' momentum: omega x J_s omega only (bodies/rigid_body.py)
+DEFECT_REEL_RING_FULL = 43        # a reel on a rigid body whose stored ring keeps the full line's inertia as it pays out (tether/reel_hub.py)
+DEFECT_REEL_ONE_STORED = 44       # a body with several reels whose mass counts only the last reel's stored tether (tether/reel.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 

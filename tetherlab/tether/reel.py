@@ -37,6 +37,7 @@ from ..kernel.layout import (
     BT_SIZE,
     DEFECT_REEL_FROZEN,
     DEFECT_REEL_NO_LDOT,
+    DEFECT_REEL_ONE_STORED,
     DEFECT_REEL_RESCALED,
     FAIL_REEL_EMPTY,
     FAIL_REEL_SPENT,
@@ -138,6 +139,13 @@ def reel_update(t, att, p):
     plus the stored tether).  A spool law's L and L' are read from the first-order block ``att``
     and its L'' from the scratch, where the spool solve put it (tether/reel_spool.py).  Returns a
     failure code (the rod at the reel at zero length)."""
+    # a body may carry several reels (hub-and-spoke): its mass is its own plus every reel's stored
+    # tether, so each reel's body starts from its dry mass and each reel adds its own below
+    for i in range(int(p[H_NREEL])):
+        rb = int(p[H_OFF_REEL]) + i * RL_SIZE
+        bt = int(p[H_OFF_BODY]) + int(p[rb + RL_BODY]) * BT_SIZE
+        if p[bt + BT_INV_M] > 0.0:
+            p[bt + BT_M] = p[rb + RL_MBODY]
     for i in range(int(p[H_NREEL])):
         rb = int(p[H_OFF_REEL]) + i * RL_SIZE
         rs = int(p[H_OFF_RSCR]) + i * RS_SIZE
@@ -162,8 +170,10 @@ def reel_update(t, att, p):
         p[gb + RT_LU] = l
         p[gb + RT_M] = rho * l
         b = int(p[rb + RL_BODY])
-        m = p[rb + RL_MBODY] + rho * (p[rb + RL_LINE] - L)
         bt = int(p[H_OFF_BODY]) + b * BT_SIZE
+        m = p[bt + BT_M] + rho * (p[rb + RL_LINE] - L)
+        if int(p[H_MUTANT]) == DEFECT_REEL_ONE_STORED:  # the negative control of several reels on a body
+            m = p[rb + RL_MBODY] + rho * (p[rb + RL_LINE] - L)
         if p[bt + BT_INV_M] > 0.0:  # a fixed body stays fixed
             p[bt + BT_M] = m
             p[bt + BT_INV_M] = 1.0 / m

@@ -35,6 +35,7 @@ from ..kernel.layout import (
     BS_W,
     DEFECT_REEL_NO_EXIT_TORQUE,
     DEFECT_REEL_NO_RING,
+    DEFECT_REEL_RING_FULL,
     H_MUTANT,
     H_NBODY,
     H_OFF_BSCR,
@@ -115,12 +116,15 @@ def reel_hub_terms(p, i, jump, ux, uy, uz):
     wz = p[bs + BS_W + 2]
     M = bs + BS_M
     F = bs + BS_F
+    mi = ms
+    if int(p[H_MUTANT]) == DEFECT_REEL_RING_FULL:  # the negative control of the shrinking inertia
+        mi = p[rb + RL_RHO] * p[rb + RL_LINE]
     # J_st into the lower right block, column by column
     for col in range(3):
         cx = 1.0 if col == 0 else 0.0
         cy = 1.0 if col == 1 else 0.0
         cz = 1.0 if col == 2 else 0.0
-        jx, jy, jz = _stored_inertia_times(ms, ex, ey, ez, ax, ay, az, rsp, cx, cy, cz)
+        jx, jy, jz = _stored_inertia_times(mi, ex, ey, ez, ax, ay, az, rsp, cx, cy, cz)
         p[M + 6 * 3 + 3 + col] += jx
         p[M + 6 * 4 + 3 + col] += jy
         p[M + 6 * 5 + 3 + col] += jz
@@ -146,7 +150,7 @@ def reel_hub_terms(p, i, jump, ux, uy, uz):
     p[F + 2] -= ms * p[ts + TS_KAP + 2]
     # torques: the flux's moment about O, the stored inertia's and the drum's gyroscopic terms, the
     # drum's spin rate and the ring's angular momentum left in the body
-    jx, jy, jz = _stored_inertia_times(ms, ex, ey, ez, ax, ay, az, rsp, wx, wy, wz)
+    jx, jy, jz = _stored_inertia_times(mi, ex, ey, ez, ax, ay, az, rsp, wx, wy, wz)
     gx, gy, gz = cross(wx, wy, wz, jx + hx, jy + hy, jz + hz)
     r2 = 0.5 * md * rsp * rsp
     if int(p[H_MUTANT]) == DEFECT_REEL_NO_RING:  # the negative control of the on-axis spin-up

@@ -182,6 +182,13 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_hub_centripetal_negative_control": g.get("deployment_hub_centripetal_negative_control"),
         "deployment_hub_axis_spin_over_bound": g.get("deployment_hub_axis_spin_over_bound"),
         "deployment_hub_ring_negative_control": g.get("deployment_hub_ring_negative_control"),
+        # part P: hub-and-spoke under spool laws (studies/deployment_spoke.py, docs/deployment.md 9.5)
+        "deployment_spoke_axis_spin_over_bound": g.get("deployment_spoke_axis_spin_over_bound"),
+        "deployment_spoke_ring_full_negative_control": g.get("deployment_spoke_ring_full_negative_control"),
+        "deployment_spoke_angular_momentum_over_bound": g.get("deployment_spoke_angular_momentum_over_bound"),
+        "deployment_spoke_wheels_negative_control": g.get("deployment_spoke_wheels_negative_control"),
+        "deployment_spoke_momentum_over_bound": g.get("deployment_spoke_momentum_over_bound"),
+        "deployment_spoke_one_stored_negative_control": g.get("deployment_spoke_one_stored_negative_control"),
         "deployment_spool_drum_over_budget": g.get("deployment_spool_drum_over_budget"),
         "deployment_spool_energy_over_bound": g.get("deployment_spool_energy_over_bound"),
         "deployment_tension_roots_over_budget": g.get("deployment_tension_roots_over_budget"),
