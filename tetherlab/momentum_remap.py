@@ -65,13 +65,12 @@ def rigid_increment(model, y: np.ndarray, a: np.ndarray, omega: np.ndarray, c: n
 
 
 def _body_to_inertial(q: np.ndarray) -> np.ndarray:
-    """R(q/|q|), body -> inertial, scalar first (as bodies/rigid.rotation)."""
-    w, x, y_, z = np.asarray(q, float) / np.linalg.norm(q)
-    return np.array([
-        [1 - 2 * (y_ * y_ + z * z), 2 * (x * y_ - w * z), 2 * (x * z + w * y_)],
-        [2 * (x * y_ + w * z), 1 - 2 * (x * x + z * z), 2 * (y_ * z - w * x)],
-        [2 * (x * z - w * y_), 2 * (y_ * z + w * x), 1 - 2 * (x * x + y_ * y_)],
-    ])  # fmt: skip
+    """R(q/|q|), body -> inertial, scalar first: the kernel's own rotation (bodies/rigid.rotation)."""
+    from .bodies.rigid import rotation
+
+    buf = np.empty(9)
+    rotation(buf, 0, *(float(c) for c in q))
+    return buf.reshape(3, 3)
 
 
 def _roots(model) -> list[int]:
