@@ -105,6 +105,20 @@ def test_scene_round_trip_keeps_the_spool_law():
         assert again.tethers[0].reel == scene.tethers[0].reel
 
 
+def test_scene_round_trip_of_a_canister_spool_law_without_a_drum_radius():
+    # a canister under the spool law has no torque and no drum radius: the written scene must not
+    # carry a torque, which would then ask for its arm
+    data = _STUDY.drum_scene().to_dict()
+    reel = data["tethers"]["main"]["reel"]
+    for key in ("spool_inertia", "drum_radius", "torque"):
+        del reel[key]
+    reel["exit"] = "canister"
+    scene = Scene.from_dict(data)
+    written = scene.to_dict()["tethers"]["main"]["reel"]
+    assert "torque" not in written and "drum_radius" not in written
+    assert Scene.from_dict(scene.to_dict()).tethers[0].reel == scene.tethers[0].reel
+
+
 BAD_SPOOLS = [
     ({"viscous_friction": "-1 N s/m"}, "tethers.main.reel.viscous_friction"),
     ({"coulomb_friction": "-2 N"}, "tethers.main.reel.coulomb_friction"),

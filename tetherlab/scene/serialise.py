@@ -267,7 +267,8 @@ def _spool_dict(r) -> dict:
         out["speed_brake_gain"] = format_si(sp.speed_brake_gain_N_s_m, VISCOUS)
         out["speed_limit_width"] = format_si(sp.speed_limit_width_m_s, SPEED)
     if r.law == "spool":
-        out["torque"] = format_si(sp.torque_N_m, TORQUE)
+        if sp.drum_radius_m > 0.0:  # a torque needs its arm: without a drum radius it is zero and unwritten
+            out["torque"] = format_si(sp.torque_N_m, TORQUE)
         return out
     out.update({"reduced_mass": format_si(sp.reduced_mass_kg, MASS), "orbit_rate": format_si(sp.orbit_rate_rad_s, ANGULAR_RATE),
                 "commanded_length": format_si(sp.commanded_length_m, LENGTH), "k1": sp.k1, "k2": sp.k2})  # fmt: skip
