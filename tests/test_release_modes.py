@@ -4,6 +4,7 @@
 import numpy as np
 import pytest
 
+from tetherlab.initial import release
 from tetherlab.initial.release import _mass_product, lateral_modes
 
 G = 9.80665
@@ -20,7 +21,8 @@ def _chain(n, uniform):
 
 @pytest.mark.parametrize("uniform", [True, False])
 @pytest.mark.parametrize("n", [4, 5, 8, 16, 32, 64])
-def test_slowest_modes_agree_with_dense_pencil(n, uniform):
+def test_slowest_modes_agree_with_dense_pencil(n, uniform, monkeypatch):
+    monkeypatch.setattr(release, "DENSE_UP_TO", 0)  # Lanczos at every n, the dense pencil below
     # Expected: scipy.linalg.eigh on the dense pencil (the route before), whose own rounding is
     # ~eps cond(M) (residual 1.6e-12 at 64 rods against Lanczos' 6e-16), hence 1e-12 relative.
     lengths, masses = _chain(n, uniform)
@@ -35,7 +37,8 @@ def test_slowest_modes_agree_with_dense_pencil(n, uniform):
 
 
 @pytest.mark.parametrize("n", [16, 256])
-def test_slowest_mode_solves_the_pencil(n):
+def test_slowest_mode_solves_the_pencil(n, monkeypatch):
+    monkeypatch.setattr(release, "DENSE_UP_TO", 0)
     # K theta = omega^2 M theta with the O(n) product, itself checked against the dense M:
     # the residual at rounding (1e-13 of K theta's size, a few hundred eps).
     lengths, masses = _chain(n, False)
@@ -50,3 +53,11 @@ def test_slowest_mode_solves_the_pencil(n):
         r = stiff * t[:, k] - w[k] ** 2 * _mass_product(lengths, masses, 0.5, t[:, k])
         assert np.max(np.abs(r)) < 1e-13 * np.max(np.abs(stiff * t[:, k]))
     assert w[0] < w[1]
+
+
+def test_shipped_sizes_keep_the_dense_route():
+    # At DENSE_UP_TO rods and below the start is the dense pencil's, bit for bit.
+    lengths, masses = _chain(release.DENSE_UP_TO, True)
+    w_all, t_all = lateral_modes(lengths, masses, 0.5, G)
+    w, t = lateral_modes(lengths, masses, 0.5, G, count=2)
+    assert np.array_equal(w, w_all[:2]) and np.array_equal(t, t_all[:, :2])

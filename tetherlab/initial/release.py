@@ -27,6 +27,10 @@ from scipy.linalg import eigh
 from ..errors import SceneError
 
 SQ3 = math.sqrt(3.0)
+# Up to this many rods the slowest modes come from the dense pencil (0.3-0.4 ms at 32 rods, 1-2 % of
+# the whole run, docs/inextensible.md section 7), so that the shipped scenes' starts keep their
+# last bits; above it from Lanczos, whose result differs from the dense one at rounding (~1e-13).
+DENSE_UP_TO = 32
 
 
 def lateral_modes(lengths_m, masses_kg, tip_mass_kg, g_m_s2, count=None):
@@ -34,14 +38,14 @@ def lateral_modes(lengths_m, masses_kg, tip_mass_kg, g_m_s2, count=None):
     of each mode in a column, normalised so the end moves sideways by 1 m (docs/hanging-chain.md
     eqs. H8-H9; the oracle tetherlab.oracles.hanging_chain is written separately from this).
     ``count``: only the ``count`` slowest modes (docs/inextensible.md section 7, the start's cost):
-    Lanczos on the O(n) products with the mass matrix instead of the dense O(n^3) pencil; None:
-    all n modes, dense."""
+    above DENSE_UP_TO rods, Lanczos on the O(n) products with the mass matrix instead of the dense
+    O(n^3) pencil; None: all n modes, dense."""
     lengths = np.asarray(lengths_m, float)
     masses = np.asarray(masses_kg, float)
     n = lengths.size
     below = np.concatenate([np.cumsum(masses[::-1])[::-1][1:], [0.0]])
     stiffness = g_m_s2 * lengths * (0.5 * masses + below + tip_mass_kg)
-    if count is not None and n > 2 * count + 1:
+    if count is not None and n > max(DENSE_UP_TO, 2 * count + 1):
         w2, vecs = _slowest_modes(lengths, masses, tip_mass_kg, stiffness, count)
     else:
         lever = np.tril(np.ones((n, n)), -1) * lengths[None, :] + np.diag(0.5 * lengths)
