@@ -78,7 +78,11 @@ def _slowest_modes(lengths, masses, tip_mass_kg, stiffness, count):
 
     n = lengths.size
     root = 1.0 / np.sqrt(stiffness)
-    op = LinearOperator((n, n), matvec=lambda v: root * _mass_product(lengths, masses, tip_mass_kg, root * np.ravel(v)), dtype=float)  # fmt: skip
+
+    def product(v):
+        return root * _mass_product(lengths, masses, tip_mass_kg, root * np.ravel(v))
+
+    op = LinearOperator((n, n), matvec=product, dtype=float)
     mu, vecs = eigsh(op, k=count, which="LA", v0=np.full(n, 1.0 / math.sqrt(n)), tol=0.0)
     order = np.argsort(mu)[::-1]
     return 1.0 / mu[order], root[:, None] * vecs[:, order]
