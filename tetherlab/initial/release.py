@@ -27,23 +27,65 @@ from scipy.linalg import eigh
 from ..errors import SceneError
 
 SQ3 = math.sqrt(3.0)
+# Up to this many rods the slowest modes come from the dense pencil (0.3-0.4 ms at 32 rods, 1-2 % of
+# the whole run, docs/inextensible.md section 7), so that the shipped scenes' starts keep their
+# last bits; above it from Lanczos, whose result differs from the dense one at rounding (~1e-13).
+DENSE_UP_TO = 32
 
 
-def lateral_modes(lengths_m, masses_kg, tip_mass_kg, g_m_s2):
+def lateral_modes(lengths_m, masses_kg, tip_mass_kg, g_m_s2, count=None):
     """(omega, theta) of the chain of rigid uniform bars hanging from a fixed point: the bar angles
     of each mode in a column, normalised so the end moves sideways by 1 m (docs/hanging-chain.md
-    eqs. H8-H9; the oracle tetherlab.oracles.hanging_chain is written separately from this)."""
+    eqs. H8-H9; the oracle tetherlab.oracles.hanging_chain is written separately from this).
+    ``count``: only the ``count`` slowest modes (docs/inextensible.md section 7, the start's cost):
+    above DENSE_UP_TO rods, Lanczos on the O(n) products with the mass matrix instead of the dense
+    O(n^3) pencil; None: all n modes, dense."""
     lengths = np.asarray(lengths_m, float)
     masses = np.asarray(masses_kg, float)
     n = lengths.size
-    lever = np.tril(np.ones((n, n)), -1) * lengths[None, :] + np.diag(0.5 * lengths)
-    mass_matrix = (lever.T * masses) @ lever + np.diag(masses * lengths**2 / 12.0) + tip_mass_kg * np.outer(lengths, lengths)
     below = np.concatenate([np.cumsum(masses[::-1])[::-1][1:], [0.0]])
-    stiffness = np.diag(g_m_s2 * lengths * (0.5 * masses + below + tip_mass_kg))
-    w2, vecs = eigh(stiffness, mass_matrix)
+    stiffness = g_m_s2 * lengths * (0.5 * masses + below + tip_mass_kg)
+    if count is not None and n > max(DENSE_UP_TO, 2 * count + 1):
+        w2, vecs = _slowest_modes(lengths, masses, tip_mass_kg, stiffness, count)
+    else:
+        lever = np.tril(np.ones((n, n)), -1) * lengths[None, :] + np.diag(0.5 * lengths)
+        mass_matrix = (lever.T * masses) @ lever + np.diag(masses * lengths**2 / 12.0) + tip_mass_kg * np.outer(lengths, lengths)
+        w2, vecs = eigh(np.diag(stiffness), mass_matrix)
+        if count is not None:
+            w2, vecs = w2[:count], vecs[:, :count]
     tip = lengths @ vecs
     scale = np.where(np.abs(tip) > 1e-12 * np.abs(vecs).max(axis=0) * lengths.sum(), tip, 1.0)
     return np.sqrt(w2), vecs / scale[None, :]
+
+
+def _mass_product(lengths, masses, tip_mass_kg, theta):
+    """M theta for the rigid-bar chain's mass matrix M = A^T diag(m) A + diag(m l^2 / 12) + m_f l l^T
+    in O(n): A theta, the bar centres' sideways displacement, is a running sum (sum_{j<i} l_j theta_j
+    + l_i theta_i / 2), and A^T y a running sum from the end (l_j (sum_{i>j} y_i + y_j / 2))."""
+    lt = lengths * theta
+    centre = np.cumsum(lt) - 0.5 * lt
+    y = masses * centre
+    back = lengths * (np.cumsum(y[::-1])[::-1] - 0.5 * y)
+    return back + masses * lengths**2 / 12.0 * theta + tip_mass_kg * lengths * lt.sum()
+
+
+def _slowest_modes(lengths, masses, tip_mass_kg, stiffness, count):
+    """(omega^2, theta) of the ``count`` slowest modes of K theta = omega^2 M theta, K diagonal and
+    positive: the largest eigenvalues mu = 1 / omega^2 of the symmetric K^-1/2 M K^-1/2, by
+    Lanczos (ARPACK) on the O(n) product; a fixed start vector so that a run repeats bit for bit.
+    They are the well separated end of mu's spectrum (mu_k ~ 1 / k^2), so few iterations do."""
+    from scipy.sparse.linalg import LinearOperator, eigsh
+
+    n = lengths.size
+    root = 1.0 / np.sqrt(stiffness)
+
+    def product(v):
+        return root * _mass_product(lengths, masses, tip_mass_kg, root * np.ravel(v))
+
+    op = LinearOperator((n, n), matvec=product, dtype=float)
+    mu, vecs = eigsh(op, k=count, which="LA", v0=np.full(n, 1.0 / math.sqrt(n)), tol=0.0)
+    order = np.argsort(mu)[::-1]
+    return 1.0 / mu[order], root[:, None] * vecs[:, order]
 
 
 def consistent_lengths(model, y, p, slot=None, iterations: int = 20):
@@ -119,7 +161,7 @@ def released_state(held, eq_y, release, g_vec, tip_mass_kg, toward, path):
         if release.mode > n:
             raise SceneError(f"{path}.mode", f"a mode from 1 to {n} (a chain of {n} rods has {n} lateral modes in a plane)",
                              str(release.mode))  # fmt: skip
-        _, modes = lateral_modes(ell, held.rod_masses(), tip_mass_kg, float(np.linalg.norm(g_vec)))
+        _, modes = lateral_modes(ell, held.rod_masses(), tip_mass_kg, float(np.linalg.norm(g_vec)), count=release.mode)
         theta = release.amplitude_m * modes[:, release.mode - 1]
         if not float(np.max(np.abs(theta))) < 0.5 * math.pi:
             raise SceneError(f"{path}.amplitude", f"an amplitude that turns no rod beyond 90 deg (mode {release.mode})",
