@@ -2,7 +2,7 @@
 
 The hanging chain of docs/hanging-chain.md (10 m, 1 kg, a 0.5 kg end mass, EA = 1e7 N, uniform
 gravity) with the end mass held at the tether's length 30 deg off the vertical (plain Newton
-converges there over 8-512 rods) and 1 % off the vertical (the issue's hold; the shooting takes over
+converges there over 8-512 rods) and 1 % off the vertical (a near-vertical hold; the shooting takes over
 at some n): wall time of one solve (compilation excluded by a warm-up), its Newton iterations and
 the path that found it; last rows: the exponent of log(wall) against log(n) fitted by least squares
 over 64-512 rods.  The Jacobian is dense, by forward differences (3n + 3 columns, each an O(n)
