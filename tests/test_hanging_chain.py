@@ -132,7 +132,7 @@ def test_statics_from_vertical_to_horizontal_many_rods(n):
         _check_equilibrium(eq, n, tip)
 
 
-def test_statics_issue_case_converges_where_newton_did_not():
+def test_statics_nail_64_rods_1pc_off_converges_where_newton_did_not():
     # 64 rods, the end mass held 1 % off the vertical with 5 mm of slack: Newton from the
     # sagging guess stalls (the tether has no tension to give it transverse stiffness); the
     # shooting start converges.  Negative control: the plain Newton alone fails here.
