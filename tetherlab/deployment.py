@@ -232,7 +232,8 @@ def retire_state(model_old, model_new, y: np.ndarray, k: int, rho_kg_m: float, l
     straight rod whose material moves with the field (2.1) of docs/deployment.md, so the momentum
     and angular momentum of their material change (the transport speed, l' (1 + eps) at the exit,
     spread over la + lb instead of la; the kink straightened) and the centre of mass moves a little.
-    The merged state is then translated back to the centre of mass of before and given the rigid
+    The merged state is then translated back to the centre of mass of before (the shift from the
+    masses, :func:`merge_com_shift`; docs/deployment.md 6.5) and given the rigid
     velocity increment a + omega x (r - c) that restores both momenta: of all velocity changes that
     do, the one that changes the kinetic energy least (docs/deployment.md 6.3;
     tetherlab/momentum_remap.py).  Momentum and angular momentum are kept to round-off; the energy
