@@ -15,7 +15,10 @@ ways, every count summed over the phases:
    RADAU5's Newton-rate cap off;
 6. other placements of the new joint (docs/deployment.md 6.5): the quasi-static offset with its
    rate scaled by 0 and 2, and the joint (or the joint and B) moved across the line until its
-   acceleration is the old rod's material acceleration there (an experiment, not a birth option).
+   acceleration is the old rod's material acceleration there (an experiment, not a birth option);
+7. what the cost comes with: phases re-integrated with the reel stopped, or with the line's
+   transverse shape and rates smoothed by a polynomial in s; the same deployment started at 5 km;
+   a 20-rod line at equilibrium with one joint kicked sideways (the error test's sensitivity).
 
 Run: ``python -m studies.deployment_steps`` (~3 min on a loaded 2-core machine; not in make verify).
 """
@@ -283,6 +286,119 @@ def placements(rod_m: float = 500.0, error_scale: str = "tether") -> dict:
     return out
 
 
+def _smoothed(model, y, degree: int):
+    """y with the transverse part (across the line's end-to-end chord) of every joint's position
+    and rate relative to the exit replaced by its least-squares polynomial in s of ``degree``,
+    the two ends held."""
+    import math
+
+    k2 = 2 * math.sqrt(3.0)
+    lay, sl = model.state, model.rod_slices[0]
+    s = np.concatenate([[0.0], np.cumsum(model.rod_lengths()[sl])])
+    z = y.copy()
+    for block in (lay.rod, lay.rod_rate):
+        P = np.vstack([np.zeros(3), np.cumsum([k2 * y[block(g)] for g in range(sl.start, sl.stop)], axis=0)])
+        R = np.vstack([np.zeros(3), np.cumsum([k2 * y[lay.rod(g)] for g in range(sl.start, sl.stop)], axis=0)])
+        u = R[-1] / np.linalg.norm(R[-1])
+        tr = P - np.outer(P @ u, u)
+        V = np.vander(s / s[-1], degree + 1)
+        w = np.ones(len(s))
+        w[0] = w[-1] = 1e6
+        coef, *_ = np.linalg.lstsq(V * w[:, None], tr * w[:, None], rcond=None)
+        new = P - tr + V @ coef
+        new[0], new[-1] = P[0], P[-1]
+        for i, g in enumerate(range(sl.start, sl.stop)):
+            z[block(g)] = (new[i + 1] - new[i]) / k2
+    return z
+
+
+def what_it_comes_with(rod_m: float = 500.0, phases=(5, 10, 20, 30), degrees=(3, 5, 8)) -> list:
+    """Per phase of ``phases`` (quasi-static births, "tether"): its steps; the same state run with
+    the reel stopped (speed 0 from the phase's start, the transport l'/l D taken out of the first
+    rod's rate: a line of fixed length); and run with the transverse shape and rates smoothed
+    (:func:`_smoothed`) for each degree."""
+    from tetherlab.model.params import ParamView
+    from tetherlab.pipeline import run_segments, segment_plan
+
+    rows = []
+
+    def hook(loop, prep, p, update):
+        res = run_segments(prep, segment_plan(prep, p), update)
+        if loop["phase"] in phases:
+            lay, g0 = prep.model.state, prep.model.rod_slices[0].start
+            t_a = float(prep.t_out[0])
+            p2 = prep.model.p.copy()
+            rv = ParamView(p2).reel(0)
+            length = rv.length0_m + rv.speed_m_s * t_a
+            first = length - (prep.model.rod_slices[0].stop - g0 - 1) * rod_m
+            z = prep.y0.copy()
+            z[lay.rod_rate(g0)] -= rv.speed_m_s / first * z[lay.rod(g0)]
+            rv.length0_m, rv.speed_m_s = length, 0.0
+            model = dataclasses.replace(prep.model, p=p2)
+            pr = dataclasses.replace(prep, model=model, y0=z)
+            row = {"phase": loop["phase"], "rods": sum(loop["rods"].values()), "steps": int(res.stats["n_accepted"]),
+                   "reel stopped": int(run_segments(pr, segment_plan(pr, model.fresh_params()), None).stats["n_accepted"])}
+            for deg in degrees:
+                pr = dataclasses.replace(prep, y0=_smoothed(prep.model, prep.y0, deg))
+                row[f"smoothed, degree {deg}"] = int(run_segments(pr, segment_plan(pr, prep.model.fresh_params()), None).stats["n_accepted"])
+            rows.append(row)
+        return res
+
+    _run_birth(rod_m, "tether", "quasi-static", hook)
+    return rows
+
+
+def started_at(length0_m: float = 5000.0, rod_m: float = 500.0) -> list:
+    """(rods, steps) per phase of the bench's deployment (quasi-static, "tether") started at
+    ``length0_m`` (straight rods) instead of 500 m, at the same speed, to the same 20 km."""
+    from tetherlab.benchmarks.deployment import _scene
+    from tetherlab.pipeline import simulate
+    from tetherlab.scene import Scene
+
+    d = _scene(rod_m, True, "tether", "quasi-static").to_dict()
+    speed = float(str(d["tethers"]["main"]["reel"]["speed"]).split()[0])
+    d["tethers"]["main"]["length"] = f"{length0_m} m"
+    d["duration"] = f"{(20000.0 - length0_m) / speed} s"
+    run = simulate(Scene.from_dict(d), progress=False)
+    rods = [int(x) for x in run.reel.groupby("phase")["rods"].first()]
+    return [(n, int(ph.stats["n_accepted"])) for n, ph in zip(rods, run.phases)]
+
+
+def kick_sensitivity(length_m: float = 10000.0, rods: int = 20, duration_s: float = 600.0,
+                     amplitudes=(1e-4, 1e-3, 1e-2)) -> dict:
+    """Steps of a line of ``rods`` rods at equilibrium on the bench's orbit (its straight radial
+    start, no reel) over ``duration_s``, and with its middle joint moved sideways (in the orbit
+    plane) by each amplitude (m), or given that sideways rate (m/s), per error scale."""
+    import math
+
+    from tetherlab.benchmarks.deployment import _scene
+    from tetherlab.pipeline import prepare, run_segments, segment_plan
+    from tetherlab.scene import Scene
+
+    k2 = 2 * math.sqrt(3.0)
+    out = {}
+    for scale in ("tether", "rod"):
+        d = _scene(length_m / rods, False, scale).to_dict()
+        d["tethers"]["main"]["length"] = f"{length_m} m"
+        d["tethers"]["main"]["rods"] = rods
+        d["duration"] = f"{duration_s} s"
+        d["output"] = {"count": 3}
+        prep = prepare(Scene.from_dict(d))
+        lay, g = prep.model.state, rods // 2
+        along = prep.y0[lay.rod(g)] / np.linalg.norm(prep.y0[lay.rod(g)])
+        side = np.cross([0.0, 0.0, 1.0], along)
+        row = {"at rest": int(run_segments(prep, segment_plan(prep, prep.model.fresh_params()), None).stats["n_accepted"])}
+        for kind, block in (("position", lay.rod), ("rate", lay.rod_rate)):
+            for a in amplitudes:
+                y = prep.y0.copy()
+                y[block(g - 1)] += a * side / k2
+                y[block(g)] -= a * side / k2
+                pr = dataclasses.replace(prep, y0=y)
+                row[f"{kind} {a:g}"] = int(run_segments(pr, segment_plan(pr, prep.model.fresh_params()), None).stats["n_accepted"])
+        out[scale] = row
+    return out
+
+
 def main() -> None:
     from tetherlab.benchmarks.deployment import _scene
     from tetherlab.pipeline import simulate
@@ -306,6 +422,11 @@ def main() -> None:
     print("Newton-rate cap (THETA_STEP) -> steps (rejections):", newton_cap_off())
     for scale in ("tether", "rod"):
         print(f"placements ({scale}):", placements(error_scale=scale))
+    print("what the cost comes with (steps of a phase: as run, reel stopped, smoothed):")
+    for row in what_it_comes_with():
+        print("  ", row)
+    print("started at 5 km: (rods, steps) per phase:", started_at())
+    print("a 10 km line of 20 rods over 600 s, its middle joint kicked:", kick_sensitivity())
 
 
 if __name__ == "__main__":
