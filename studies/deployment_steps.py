@@ -18,7 +18,10 @@ ways, every count summed over the phases:
    acceleration is the old rod's material acceleration there (an experiment, not a birth option);
 7. what the cost comes with: phases re-integrated with the reel stopped, or with the line's
    transverse shape and rates smoothed by a polynomial in s; the same deployment started at 5 km;
-   a 20-rod line at equilibrium with one joint kicked sideways (the error test's sensitivity).
+   a 20-rod line at equilibrium with one joint kicked sideways (the error test's sensitivity);
+8. the retirement's centre of mass on an orbit (docs/deployment.md 6.5): the bench's line hauled in
+   from 5 km at 2 m/s (five merges), with the translation from the masses and with the former one
+   from the momentum columns: energy jumps at the merges and the line's angle at the end.
 
 Run: ``python -m studies.deployment_steps`` (~3 min on a loaded 2-core machine; not in make verify).
 """
@@ -399,6 +402,49 @@ def kick_sensitivity(length_m: float = 10000.0, rods: int = 20, duration_s: floa
     return out
 
 
+def retrieval_merges(former: bool = False) -> dict:
+    """The bench's line on its orbit hauled in from 5 km at 2 m/s for 1400 s (five retirements):
+    the energy jump at each merge (J), the largest jump of H at a merge, and at the end the end
+    mass's in-plane angle from the station's radial direction (rad) and its offset (m).
+    ``former``: the merge translated by the centre of mass of the momentum columns
+    (``restore(..., translate=True)``), as before docs/deployment.md 6.5."""
+    import tetherlab.deployment as dep
+    from tetherlab.benchmarks.deployment import _scene
+    from tetherlab.momentum_remap import centre_of_mass, momenta, restore
+    from tetherlab.pipeline import simulate
+    from tetherlab.scene import Scene
+
+    def columns(model_old, model_new, y, k, rho_kg_m, la_m, lb_m, speed_m_s, t_s, angular=True):
+        lo, ln = model_old.state, model_new.state
+        g0 = model_old.rod_slices[k].start
+        z = dep._with_rods(lo, ln, y, g0, 2, [(y[lo.rod(g0)] + y[lo.rod(g0 + 1)], y[lo.rod_rate(g0)] + y[lo.rod_rate(g0 + 1)])])
+        c_old, _ = centre_of_mass(model_old, t_s, y)
+        return restore(model_new, t_s, z, momenta(model_old, t_s, y[None, :])[0], c_old)[0]
+
+    d = _scene(500.0, True, "tether").to_dict()
+    d["tethers"]["main"]["length"] = "5000 m"
+    d["tethers"]["main"]["reel"]["speed"] = "-2 m/s"
+    d["duration"] = "1400 s"
+    d["output"] = {"count": 201}
+    keep = dep.retire_state
+    if former:
+        dep.retire_state = columns
+    try:
+        run = simulate(Scene.from_dict(d), progress=False)
+    finally:
+        dep.retire_state = keep
+    inv = run.invariants
+    e, ph = inv["energy_J"].to_numpy(), inv["phase"].to_numpy()
+    H = inv[[f"angmom_{a}_kg_m2_s" for a in "xyz"]].to_numpy()
+    ts = run.phases[-1].timeseries
+    r0 = ts[["m0.x_m", "m0.y_m"]].to_numpy()[-1]
+    rel = ts[["mf.x_m", "mf.y_m"]].to_numpy()[-1] - r0
+    return {"retirements": sum(c["change"] == "retire" for c in run.changes),
+            "energy_jumps_J": np.diff(e)[np.diff(ph) != 0].tolist(),
+            "max_H_jump": float(np.abs(np.diff(H, axis=0)[np.diff(ph) != 0]).max()),
+            "end_angle_rad": float(np.arctan2(np.cross(r0, rel), r0 @ rel)), "end_offset_m": rel.tolist()}  # fmt: skip
+
+
 def main() -> None:
     from tetherlab.benchmarks.deployment import _scene
     from tetherlab.pipeline import simulate
@@ -427,6 +473,8 @@ def main() -> None:
         print("  ", row)
     print("started at 5 km: (rods, steps) per phase:", started_at())
     print("a 10 km line of 20 rods over 600 s, its middle joint kicked:", kick_sensitivity())
+    print("retirements on the orbit, centre of mass from the masses:", retrieval_merges())
+    print("  the same from the momentum columns (before):", retrieval_merges(former=True))
 
 
 if __name__ == "__main__":
