@@ -232,7 +232,8 @@ def retire_state(model_old, model_new, y: np.ndarray, k: int, rho_kg_m: float, l
     straight rod whose material moves with the field (2.1) of docs/deployment.md, so the momentum
     and angular momentum of their material change (the transport speed, l' (1 + eps) at the exit,
     spread over la + lb instead of la; the kink straightened) and the centre of mass moves a little.
-    The merged state is then translated back to the centre of mass of before and given the rigid
+    The merged state is then translated back to the centre of mass of before (the shift from the
+    masses, :func:`merge_com_shift`; docs/deployment.md 6.5) and given the rigid
     velocity increment a + omega x (r - c) that restores both momenta: of all velocity changes that
     do, the one that changes the kinetic energy least (docs/deployment.md 6.3;
     tetherlab/momentum_remap.py).  Momentum and angular momentum are kept to round-off; the energy
@@ -241,7 +242,7 @@ def retire_state(model_old, model_new, y: np.ndarray, k: int, rho_kg_m: float, l
     ``angular=False``: the correction of linear momentum alone (the velocity of B changed by
     delta so that the merged rod and what moves with B take -dP back; section 6.2): the negative
     control of the angular-momentum gate only."""
-    from .momentum_remap import centre_of_mass, momenta, restore
+    from .momentum_remap import _roots, centre_of_mass, momenta, restore
     from .system import point_positions
 
     lay_old = model_old.state
@@ -254,8 +255,14 @@ def retire_state(model_old, model_new, y: np.ndarray, k: int, rho_kg_m: float, l
     if angular:
         z = _with_rods(lay_old, lay_new, y, g0, 2, [(d, dd)])
         before = momenta(model_old, t_s, y[None, :])[0]
-        c_old, _ = centre_of_mass(model_old, t_s, y)
-        z, _ = restore(model_new, t_s, z, before, c_old)
+        c_old, mass = centre_of_mass(model_old, t_s, y)
+        # The merge moves the centre of mass by merge_com_shift (from the masses); it is taken back
+        # exactly, not from the momentum columns, whose centre of mass carries ~1e-5 m of round-off
+        # on an orbit (~0.1 J of potential per translation; docs/deployment.md 6.4, 6.5)
+        shift = -merge_com_shift(rho_kg_m, la_m, lb_m, 2 * SQ3 * d_a, 2 * SQ3 * d_b) / mass
+        for b in _roots(model_new):
+            z[lay_new.root_position(b)] += shift
+        z, _ = restore(model_new, t_s, z, before, c_old, translate=False)
         return z
     v_a = point_positions(model_old, y)["jvel"][k][0]
     k2 = 2 * SQ3
@@ -273,6 +280,16 @@ def retire_state(model_old, model_new, y: np.ndarray, k: int, rho_kg_m: float, l
     if n >= 3:  # the next rod keeps its far end's velocity
         z[lay_new.rod_rate(g0 + 1)] -= delta / k2
     return z
+
+
+def merge_com_shift(rho_kg_m: float, la_m: float, lb_m: float, D_a: np.ndarray, D_b: np.ndarray) -> np.ndarray:
+    """The first moment of mass (kg m) that a retirement adds: rods of la and lb with chords D_a
+    (from the exit) and D_b merged into one rod of la + lb with the chord D_a + D_b.  Each rod's
+    material has its centre of mass at the middle of its chord, and the exit and the far end stay,
+    so the change is (m_a + m_b)(D_a + D_b)/2 - m_a D_a/2 - m_b (D_a + D_b/2) = (m_a D_b - m_b D_a)/2:
+    zero for a straight line of one strain, the kink's and the strain difference's otherwise
+    (docs/deployment.md 6.5).  Divided by the total mass it is the move of the centre of mass."""
+    return 0.5 * rho_kg_m * (la_m * np.asarray(D_b, float) - lb_m * np.asarray(D_a, float))
 
 
 def _with_rods(lay_old, lay_new, y, g0, n_out, rods_in) -> np.ndarray:
