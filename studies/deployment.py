@@ -49,8 +49,11 @@ J. A SEDS-like deployment (studies/reel_laws.py seds_scene): 20 km from a canist
    passive friction brake to a 25 kg end mass from 400 km, run to the end of the line; no gate
    (no published profile is reproduced), the swing angle and tension profile as figures.
 K. A YES2-like two-stage deployment (studies/reel_yes2.py): the tension law in stages, l_c = 3.4 km
-   then 30 km (docs/deployment.md 10.6, 15); no gate yet; length, rate, tension, in-plane angle and
-   the commanded length in a figure.
+   then 30 km (docs/deployment.md 10.6, 15); length, rate, tension, in-plane angle and the commanded
+   length in a figure. Its first stage held alone for 8 orbits: the last output's length against the
+   law's rest length with the massive line, the drum and the strain (docs/deployment.md 11.4,
+   studies/reel_hold.py), within the linear closed loop's settling from the state two orbits earlier
+   plus the terms the rest length leaves out. Control: the law's 3 l_c read as 3 L (DEFECT_TENSION_3L).
 L. Retrieval of 5 km to 100 m (studies/reel_retrieval.py, docs/deployment.md 14): at constant speed
    (the growing libration) and under the tension law in stages (held); no gate here (the
    comparison with the rigid-rod pendulum is part N).
@@ -517,8 +520,11 @@ def part_seds():
 
 
 def part_yes2():
-    """K: the YES2-like two-stage deployment (no gate)."""
+    """K: the YES2-like two-stage deployment (shown), and its first stage held alone against the
+    law's rest length with the massive line (docs/deployment.md 11.4, 15) with its control, the
+    law's 3 l_c read as 3 L (DEFECT_TENSION_3L)."""
     from studies import reel_yes2 as Y
+    from tetherlab.model.params import DEFECT_TENSION_3L
 
     run = simulate_reel(Y.yes2_scene(), progress=False, raise_on_failure=False)
     if not run.ok:
@@ -527,8 +533,27 @@ def part_yes2():
     births = sum(c["change"] == "birth" for c in run.changes)
     rows = [{"case": "K YES2-like: end of the run", "value": float(prof["t"][-1] / 60.0), "unit": "min",
              "note": f"{prof['L'][-1] / 1e3:.1f} km out ({run.stopped_by or 'end of run'}), speed {prof['v'][-1]:.1f} m/s, "
-                     f"angle {math.degrees(prof['theta'][-1]):.1f} deg; {births} births; no gate"}]  # fmt: skip
-    return rows, {}, prof
+                     f"angle {math.degrees(prof['theta'][-1]):.1f} deg; {births} births"}]  # fmt: skip
+    hold = simulate_reel(Y.yes2_hold_scene(), progress=False, raise_on_failure=False)
+    if not hold.ok:
+        raise RuntimeError(f"part K: the held first stage failed: {hold.message}")
+    m = Y.hold_measure(hold)
+    ctrl = simulate_reel(Y.yes2_hold_scene(), progress=False, raise_on_failure=False, defect=DEFECT_TENSION_3L)
+    c_ratio = Y.hold_measure(ctrl)["ratio"] if ctrl.ok else 0.0  # a refusal shows no teeth: the control gate fails
+    terms = ", ".join(f"{k} {v:.3g}" for k, v in m["model"].items())
+    rows += [
+        {"case": "K YES2-like first stage held: |L_end - l_eq| / budget", "value": m["err"], "bound": m["budget"],
+         "over bound": m["ratio"], "unit": "m",
+         "note": f"l_eq {m['l_eq']:.2f} m (l_c {Y.YES2['lc1']:g} m), L_end {m['L_end']:.2f} m after {Y.HOLD_ORBITS:g} orbits; "
+                 f"transient {m['b_tr']:.3g} m (gain {m['gain']:.3g} from {Y.HOLD_FROM_ORBITS:g} orbits, delta {m['delta']:.3g}), "
+                 f"model {terms} m"},
+        {"case": "control 3 l_c read as 3 L: the same", "value": c_ratio, "bound": 1.0, "over bound": c_ratio, "unit": "1",
+         "note": "must exceed 1"},
+    ]  # fmt: skip
+    gates = {"deployment_yes2_hold_over_budget": m["ratio"],
+             "deployment_yes2_hold_3l_negative_control": 1.0 / c_ratio if c_ratio > 0 else math.inf}
+    prof["hold"] = m
+    return rows, gates, prof
 
 
 def part_retrieval_law():
