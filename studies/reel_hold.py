@@ -147,7 +147,10 @@ def settling_bound(A: np.ndarray, z0: np.ndarray, dtau: float, delta: float) -> 
     |e1^T e^(A dtau)| |z0|, widened for a relative error delta of its coefficients, which moves the
     roots right by at most `root_shift` (first order): x (1 + delta) e^(shift dtau)."""
     row = expm(A * dtau)[0]
-    return float(np.linalg.norm(row) * np.linalg.norm(z0) * (1.0 + delta) * math.exp(root_shift(A, delta) * dtau))
+    grow = root_shift(A, delta) * dtau
+    if grow > 700.0:  # beyond a float: the model bounds nothing
+        return math.inf
+    return float(np.linalg.norm(row) * np.linalg.norm(z0) * (1.0 + delta) * math.exp(grow))
 
 
 def static_slope(h: Hold, l_m: float, dl: float = 1.0) -> float:
@@ -156,7 +159,7 @@ def static_slope(h: Hold, l_m: float, dl: float = 1.0) -> float:
     return (h.command(l_m + dl) - exit_tension(h, l_m + dl) - h.command(l_m - dl) + exit_tension(h, l_m - dl)) / (2 * dl)
 
 
-def settling_measure(prof: dict, h: Hold, t0_s: float, *, rtol: float, ecc_max: float = 0.0) -> dict:
+def settling_measure(prof: dict, h: Hold, t0_s: float, *, rtol: float, ecc_max: float = 0.0, window: bool = False) -> dict:
     """The hold's settled length against its derived equilibrium (docs/deployment.md 11.4):
     |L(t_end) - l_eq| over the budget B = B_tr + B_model.
 
@@ -164,7 +167,8 @@ def settling_measure(prof: dict, h: Hold, t0_s: float, *, rtol: float, ecc_max: 
     its swing at t0_s: with k = |e1^T e^(A dtau)| (1 + delta) e^(shift dtau) the linear closed loop's
     gain from t0 to t_end (`settling_bound`), |L_end - R| <= k l |z0 - z_R|, and z_R is known only
     through L_end: |z0 - z_R| <= |z0 - z_end| + |L_end - R|/l, so |L_end - R| <= k l |z0 - z_end|/(1 - k)
-    (k < 1 required: the loop must have decayed over the window).  B_model, the terms the equilibrium
+    (k < 1 required: the loop must have decayed over the window; otherwise the ratio is infinite,
+    a failure: a run that swings too much to be bounded has not shown that it settles).  B_model, the terms the equilibrium
     leaves out:
 
     * the strain's representation by the rods' strains: the whole strain's share of l_eq;
@@ -175,7 +179,9 @@ def settling_measure(prof: dict, h: Hold, t0_s: float, *, rtol: float, ecc_max: 
     own rest state) + 4 l/a (the field beyond its gradient in the dynamics) + 2 (Omega/omega_1)^2 (the
     line's first lateral mode, omega_1 = (pi/l) (T/rho)^(1/2), and the drum's axial one,
     (EA/(l m_s))^(1/2), both far above Omega: their quasi-static share) + eps.
-    ``prof``: t (s), L (m), v (m/s), theta (rad) at the outputs."""
+    ``prof``: t (s), L (m), v (m/s), theta (rad) at the outputs.  ``window``: the worst ratio over
+    every output from t0 on, each against the loop's gain from t0 to it (the settling, not only its
+    end: a loop that decays slower than its roots fails between t0 and t_end whatever its phase)."""
     om = h.omega
     l_eq = hold_equilibrium(h)
     l_ns = hold_equilibrium(h, strain=False)
@@ -200,6 +206,18 @@ def settling_measure(prof: dict, h: Hold, t0_s: float, *, rtol: float, ecc_max: 
     model = {"strain": abs(l_eq - l_ns), "orbit": T_eq * 3.0 * ecc_max / slope, "integrator": 10.0 * rtol * l_eq}
     budget = b_tr + sum(model.values())
     err = abs(L[-1] - l_eq)
-    return {"ratio": err / budget, "err": err, "budget": budget, "b_tr": b_tr, "gain": k, "model": model,
-            "delta": delta, "l_eq": l_eq, "l_eq_no_strain": l_ns, "T_eq": T_eq, "roots": roots, "L_end": float(L[-1]),
-            "slope": slope}
+    # k >= 1: the swing is too large, or the window too short, for the linear loop to bound what is
+    # left of it; the settling is then not shown, and the gate fails (an infinite ratio), never passes
+    out = {"ratio": err / budget if math.isfinite(budget) else math.inf, "err": err, "budget": budget, "b_tr": b_tr, "gain": k, "model": model,
+           "delta": delta, "l_eq": l_eq, "l_eq_no_strain": l_ns, "T_eq": T_eq, "roots": roots, "L_end": float(L[-1]),
+           "slope": slope}
+    if window and math.isfinite(b_tr):
+        # along the window: |L(t) - R| <= k(t) (l |z0 - z_end| + |L_end - R|) <= k(t) (l |dz| + B_tr), so
+        # B(t) = k(t) (l |dz| + B_tr) + B_model, which is the end's budget at t_end
+        tw = t[i0:]
+        kt = np.array([settling_bound(A, np.array([1.0, 0.0, 0.0, 0.0]), (x - t[i0]) * om, delta) for x in tw])
+        bt = kt * (l_eq * float(np.linalg.norm(dz)) + b_tr) + sum(model.values())
+        et = np.abs(L[i0:] - l_eq)
+        j = int(np.argmax(et / bt))
+        out.update({"ratio": float(et[j] / bt[j]), "t_worst": float(tw[j]), "err_t": et, "budget_t": bt, "t_window": tw})
+    return out

@@ -102,7 +102,8 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
              ("deployment_spoke_wheels_negative_control", "wheels_gyro_dropped",
               "deployment_spoke_angular_momentum_over_bound"),
              ("deployment_spoke_one_stored_negative_control", "reel_one_stored", "deployment_spoke_momentum_over_bound"),
-             ("deployment_yes2_hold_3l_negative_control", "tension_3l", "deployment_yes2_hold_over_budget"))
+             ("deployment_yes2_hold_3l_negative_control", "tension_3l", "deployment_yes2_hold_over_budget"),
+             ("deployment_retrieval_settle_3l_negative_control", "tension_3l", "deployment_retrieval_settle_over_budget"))
     for ctrl_gate, defect, gate in pairs:
         assert ParamView(_reel_params(defect)).defect == getattr(L, "DEFECT_" + {
             "reel_rescaled": "REEL_RESCALED", "reel_strain_rate_without_ldot": "REEL_NO_LDOT",
