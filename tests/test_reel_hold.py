@@ -85,3 +85,43 @@ def test_the_held_yes2_stage_settles_at_the_derived_rest_length_and_the_3l_mispr
     ctrl = simulate_reel(_YES2.yes2_hold_scene(), progress=False, raise_on_failure=False, defect=DEFECT_TENSION_3L)
     assert ctrl.ok, ctrl.message
     assert _YES2.hold_measure(ctrl)["ratio"] > 1.0
+
+
+def _linear_profile(h, A, z0, orbits, *, slower=0.0):
+    # the outputs of the linear loop (11.6) itself from z0 (or with every root moved right by `slower`)
+    from scipy.linalg import expm
+
+    l_eq = _HOLD.hold_equilibrium(h)
+    tau = np.linspace(0.0, orbits * 2.0 * math.pi, 801)
+    Z = np.array([expm((A + slower * np.eye(4)) * x) @ z0 for x in tau])
+    t = tau / h.omega
+    return {"t": t, "L": l_eq * (1.0 + Z[:, 0]), "v": l_eq * h.omega * Z[:, 1], "theta": Z[:, 2]}
+
+
+def test_the_settling_budget_holds_the_linear_loop_and_refuses_a_slower_one():
+    # docs/deployment.md 11.4, 14.2: the loop's own trajectory lies within B(t) at every output
+    # (delta then covers only the swing's quadratic terms it does not have); the same with every root
+    # 0.1 Omega to the right (the slow pair decaying at 0.063 Omega instead of 0.163) does not
+    h = _YES2.yes2_hold()
+    A, _ = _HOLD.hold_linear_model(h, _HOLD.hold_equilibrium(h))
+    z0 = np.array([0.01, 0.0, 0.005, 0.0])
+    t0 = 2.0 * 2.0 * math.pi / h.omega
+    ok = _HOLD.settling_measure(_linear_profile(h, A, z0, 4.0), h, t0, rtol=0.0, window=True)
+    assert ok["ratio"] < 1.0, ok["ratio"]
+    slow = _HOLD.settling_measure(_linear_profile(h, A, z0, 4.0, slower=0.1), h, t0, rtol=0.0, window=True)
+    assert slow["ratio"] > 1.0, slow["ratio"]
+
+
+@pytest.mark.slow
+def test_the_staged_retrieval_settles_in_its_last_stage_as_the_closed_loop_says():
+    # docs/deployment.md 14.2: measured 0.19 of the budget; the 3 l_c misprint tumbles the line
+    study = import_study("reel_retrieval")
+    run = simulate_reel(study.retrieval_scene(controlled=True, orbits=study.SETTLE_ORBITS), progress=False,
+                        raise_on_failure=False)  # fmt: skip
+    assert run.ok, run.message
+    m = study.settle_measure(run)
+    assert m["ratio"] < 1.0, m["ratio"]
+    ctrl = simulate_reel(study.retrieval_scene(controlled=True, orbits=study.SETTLE_ORBITS), progress=False,
+                         raise_on_failure=False, defect=DEFECT_TENSION_3L)  # fmt: skip
+    assert ctrl.ok, ctrl.message  # a refusal would show no teeth
+    assert study.settle_measure(ctrl)["ratio"] > 1.0
