@@ -159,7 +159,8 @@ def static_slope(h: Hold, l_m: float, dl: float = 1.0) -> float:
     return (h.command(l_m + dl) - exit_tension(h, l_m + dl) - h.command(l_m - dl) + exit_tension(h, l_m - dl)) / (2 * dl)
 
 
-def settling_measure(prof: dict, h: Hold, t0_s: float, *, rtol: float, ecc_max: float = 0.0, window: bool = False) -> dict:
+def settling_measure(prof: dict, h: Hold, t0_s: float, *, rtol: float, ecc_max: float = 0.0,
+                     window: bool = False) -> dict:
     """The hold's settled length against its derived equilibrium (docs/deployment.md 11.4):
     |L(t_end) - l_eq| over the budget B = B_tr + B_model.
 
@@ -168,8 +169,8 @@ def settling_measure(prof: dict, h: Hold, t0_s: float, *, rtol: float, ecc_max: 
     gain from t0 to t_end (`settling_bound`), |L_end - R| <= k l |z0 - z_R|, and z_R is known only
     through L_end: |z0 - z_R| <= |z0 - z_end| + |L_end - R|/l, so |L_end - R| <= k l |z0 - z_end|/(1 - k)
     (k < 1 required: the loop must have decayed over the window; otherwise the ratio is infinite,
-    a failure: a run that swings too much to be bounded has not shown that it settles).  B_model, the terms the equilibrium
-    leaves out:
+    a failure: a run that swings too much to be bounded has not shown that it settles).  B_model,
+    the terms the equilibrium leaves out:
 
     * the strain's representation by the rods' strains: the whole strain's share of l_eq;
     * the CoM's orbit off the circle (eccentricity e): Omega^2 changes by 3 e, the tension with it;
@@ -208,9 +209,9 @@ def settling_measure(prof: dict, h: Hold, t0_s: float, *, rtol: float, ecc_max: 
     err = abs(L[-1] - l_eq)
     # k >= 1: the swing is too large, or the window too short, for the linear loop to bound what is
     # left of it; the settling is then not shown, and the gate fails (an infinite ratio), never passes
-    out = {"ratio": err / budget if math.isfinite(budget) else math.inf, "err": err, "budget": budget, "b_tr": b_tr, "gain": k, "model": model,
-           "delta": delta, "l_eq": l_eq, "l_eq_no_strain": l_ns, "T_eq": T_eq, "roots": roots, "L_end": float(L[-1]),
-           "slope": slope}
+    out = {"ratio": err / budget if math.isfinite(budget) else math.inf, "err": err, "budget": budget,
+           "b_tr": b_tr, "gain": k, "model": model, "delta": delta, "l_eq": l_eq, "l_eq_no_strain": l_ns,
+           "T_eq": T_eq, "roots": roots, "L_end": float(L[-1]), "slope": slope}
     if window and math.isfinite(b_tr):
         # along the window: |L(t) - R| <= k(t) (l |z0 - z_end| + |L_end - R|) <= k(t) (l |dz| + B_tr), so
         # B(t) = k(t) (l |dz| + B_tr) + B_model, which is the end's budget at t_end

@@ -5,9 +5,10 @@ YES2 (Foton-M3, 25 September 2007; ESA's technical facts and the mission's recon
 the Earth at ~3 m/s on a 0.5 mm Dyneema line of ~31.7 km, from a 260-300 km orbit; the first stage
 went out to ~3.4 km, where the brake held it, and the second stage deployed fast to ~30 km.  The
 scene keeps that outline, not the flight's data: a 6.5 t spacecraft on a 280 km circular orbit, a
-14 kg end mass ejected radially outwards (the scene's side "up": the flight's went towards the Earth,
-which changes the sign of the field's P3 term in the hold's equilibrium, docs/deployment.md 11.4) at 3 m/s with 200 m out, 0.19 g/m (the 0.5 mm line's section at
-970 kg/m^3: 6 kg over 31.7 km), EA 10 kN, damping 50 N s, rods of 2 km, paid from a drum under the
+14 kg end mass ejected radially outwards at 3 m/s with 200 m out (the scene's side "up"; the
+flight's went towards the Earth, which changes the sign of the field's P3 term in the hold's rest
+length, docs/deployment.md 11.4), 0.19 g/m (the 0.5 mm line's section at 970 kg/m^3: 6 kg over
+31.7 km), EA 10 kN, damping 50 N s, rods of 2 km, paid from a drum under the
 tension law (k1 = 4, k2 = 1) about l_c = 3.4 km, then 30 km from the start of the stage, the
 command kept above 5 mN (a brake cannot push).  Not a reproduction: the flight used a barber-pole
 brake on a spool with its own control, not this law.
