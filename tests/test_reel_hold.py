@@ -76,7 +76,7 @@ def test_the_settling_bound_starts_at_the_state_and_its_shift_scales_with_delta(
 
 @pytest.mark.slow
 def test_the_held_yes2_stage_settles_at_the_derived_rest_length_and_the_3l_misprint_does_not():
-    # docs/deployment.md 11.4: budget derived there; measured 0.26 of it, the control 4.5x over
+    # docs/deployment.md 11.4: budget derived there; measured 0.28 of it, the control 4.6x over
     run = simulate_reel(_YES2.yes2_hold_scene(), progress=False, raise_on_failure=False)
     assert run.ok, run.message
     m = _YES2.hold_measure(run)
