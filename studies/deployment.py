@@ -49,11 +49,16 @@ J. A SEDS-like deployment (studies/reel_laws.py seds_scene): 20 km from a canist
    passive friction brake to a 25 kg end mass from 400 km, run to the end of the line; no gate
    (no published profile is reproduced), the swing angle and tension profile as figures.
 K. A YES2-like two-stage deployment (studies/reel_yes2.py): the tension law in stages, l_c = 3.4 km
-   then 30 km (docs/deployment.md 10.6, 15); no gate yet; length, rate, tension, in-plane angle and
-   the commanded length in a figure.
+   then 30 km (docs/deployment.md 10.6, 15); length, rate, tension, in-plane angle and the commanded
+   length in a figure. Its first stage held alone for 8 orbits: the last output's length against the
+   law's rest length with the massive line, the drum and the strain (docs/deployment.md 11.4,
+   studies/reel_hold.py), within the linear closed loop's settling from the state two orbits earlier
+   plus the terms the rest length leaves out. Control: the law's 3 l_c read as 3 L (DEFECT_TENSION_3L).
 L. Retrieval of 5 km to 100 m (studies/reel_retrieval.py, docs/deployment.md 14): at constant speed
-   (the growing libration) and under the tension law in stages (held); no gate here (the
-   comparison with the rigid-rod pendulum is part N).
+   (the growing libration; its comparison with the rigid-rod pendulum is part N) and under the
+   tension law in stages (held), run to 8 orbits: the last stage's length against its rest length
+   at every output from 6 orbits on, within the linear closed loop's settling from the state there
+   (docs/deployment.md 14.2). Control: the law's 3 l_c read as 3 L (DEFECT_TENSION_3L).
 M. The spool limits (studies/reel_limits.py, docs/deployment.md 10.4): a drum in uniform gravity under
    the tension law with its motor's torque limited and a regulating brake on the speed, both
    limits pressed: the torque bound, the speed bound from the balance at the fastest point, the
@@ -517,8 +522,11 @@ def part_seds():
 
 
 def part_yes2():
-    """K: the YES2-like two-stage deployment (no gate)."""
+    """K: the YES2-like two-stage deployment (shown), and its first stage held alone against the
+    law's rest length with the massive line (docs/deployment.md 11.4, 15) with its control, the
+    law's 3 l_c read as 3 L (DEFECT_TENSION_3L)."""
     from studies import reel_yes2 as Y
+    from tetherlab.model.params import DEFECT_TENSION_3L
 
     run = simulate_reel(Y.yes2_scene(), progress=False, raise_on_failure=False)
     if not run.ok:
@@ -527,25 +535,65 @@ def part_yes2():
     births = sum(c["change"] == "birth" for c in run.changes)
     rows = [{"case": "K YES2-like: end of the run", "value": float(prof["t"][-1] / 60.0), "unit": "min",
              "note": f"{prof['L'][-1] / 1e3:.1f} km out ({run.stopped_by or 'end of run'}), speed {prof['v'][-1]:.1f} m/s, "
-                     f"angle {math.degrees(prof['theta'][-1]):.1f} deg; {births} births; no gate"}]  # fmt: skip
-    return rows, {}, prof
+                     f"angle {math.degrees(prof['theta'][-1]):.1f} deg; {births} births"}]  # fmt: skip
+    hold = simulate_reel(Y.yes2_hold_scene(), progress=False, raise_on_failure=False)
+    if not hold.ok:
+        raise RuntimeError(f"part K: the held first stage failed: {hold.message}")
+    m = Y.hold_measure(hold)
+    ctrl = simulate_reel(Y.yes2_hold_scene(), progress=False, raise_on_failure=False, defect=DEFECT_TENSION_3L)
+    c_ratio = Y.hold_measure(ctrl)["ratio"] if ctrl.ok else 0.0  # a refusal shows no teeth: the control gate fails
+    terms = ", ".join(f"{k} {v:.3g}" for k, v in m["model"].items())
+    rows += [
+        {"case": "K YES2-like first stage held: |L_end - l_eq| / budget", "value": m["err"], "bound": m["budget"],
+         "over bound": m["ratio"], "unit": "m",
+         "note": f"l_eq {m['l_eq']:.2f} m (l_c {Y.YES2['lc1']:g} m), L_end {m['L_end']:.2f} m after {Y.HOLD_ORBITS:g} orbits; "
+                 f"transient {m['b_tr']:.3g} m (gain {m['gain']:.3g} from {Y.HOLD_FROM_ORBITS:g} orbits, delta {m['delta']:.3g}), "
+                 f"model {terms} m"},
+        {"case": "control 3 l_c read as 3 L: the same", "value": c_ratio, "bound": 1.0, "over bound": c_ratio, "unit": "1",
+         "note": "must exceed 1"},
+    ]  # fmt: skip
+    gates = {"deployment_yes2_hold_over_budget": m["ratio"],
+             "deployment_yes2_hold_3l_negative_control": 1.0 / c_ratio if c_ratio > 0 else math.inf}
+    prof["hold"] = m
+    return rows, gates, prof
 
 
 def part_retrieval_law():
-    """L: retrieval 5 km -> 100 m, at constant speed and under the staged tension law (no gate)."""
+    """L: retrieval 5 km -> 100 m, at constant speed (shown; gated in part N) and under the staged
+    tension law, run to SETTLE_ORBITS: the last stage's settling to its rest length gated
+    (docs/deployment.md 14.2), with the law's 3 l_c read as 3 L (DEFECT_TENSION_3L) as its control."""
     from studies import reel_retrieval as R
+    from tetherlab.model.params import DEFECT_TENSION_3L
 
-    out = {}
+    out, runs = {}, {}
     for name, controlled in (("constant", False), ("tension", True)):
-        run = simulate_reel(R.retrieval_scene(controlled=controlled), progress=False, raise_on_failure=False)
+        kw = {"orbits": R.SETTLE_ORBITS} if controlled else {}
+        run = simulate_reel(R.retrieval_scene(controlled=controlled, **kw), progress=False, raise_on_failure=False)
         if not run.ok:
             raise RuntimeError(f"part L: the {name} retrieval failed: {run.message}")
-        out[name] = R.profile(run)
+        out[name], runs[name] = R.profile(run), run
     out["oracle"] = R.oracle_angle(out["constant"]["t"])
     rows = [{"case": f"L retrieval 5 km -> 100 m, {name}: max |angle|", "value": math.degrees(float(abs(pr["theta"]).max())),
-             "unit": "deg", "note": f"L {pr['L'][-1]:.0f} m at {pr['t'][-1] / 60:.0f} min; no gate"}
+             "unit": "deg", "note": f"L {pr['L'][-1]:.1f} m at {pr['t'][-1] / 60:.0f} min"}
             for name, pr in (("constant speed 1 m/s", out["constant"]), ("tension law in stages", out["tension"]))]  # fmt: skip
-    return rows, {}, out
+    m = R.settle_measure(runs["tension"])
+    ctrl = simulate_reel(R.retrieval_scene(controlled=True, orbits=R.SETTLE_ORBITS), progress=False,
+                         raise_on_failure=False, defect=DEFECT_TENSION_3L)  # fmt: skip
+    c = R.settle_measure(ctrl) if ctrl.ok else None  # a refusal shows no teeth: the control gate fails
+    c_ratio = 0.0 if c is None else c["ratio"]
+    P = 2.0 * math.pi / R.omega()
+    rows += [
+        {"case": "L staged retrieval, last stage: worst |L(t) - l_eq| / budget(t)", "value": m["ratio"], "bound": 1.0,
+         "over bound": m["ratio"], "unit": "1",
+         "note": f"l_eq {m['l_eq']:.3f} m (l_c {R.RETRIEVAL['lc']:g} m); from {R.SETTLE_FROM_ORBITS:g} to {R.SETTLE_ORBITS:g} orbits, "
+                 f"worst at {m['t_worst'] / P:.2f} orbits; at the end {m['err']:.3f} m against {m['budget']:.3f} m "
+                 f"(gain {m['gain']:.3g}, delta {m['delta']:.3g})"},
+        {"case": "control 3 l_c read as 3 L: the same", "value": c_ratio, "bound": 1.0, "over bound": c_ratio, "unit": "1",
+         "note": "must exceed 1" + ("" if c is None else f" (L at the end {c['L_end']:.0f} m)")},
+    ]  # fmt: skip
+    gates = {"deployment_retrieval_settle_over_budget": m["ratio"],
+             "deployment_retrieval_settle_3l_negative_control": 1.0 / c_ratio if c_ratio > 0 else math.inf}
+    return rows, gates, out
 
 
 def part_limits():

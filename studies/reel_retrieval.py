@@ -184,3 +184,34 @@ def pendulum_measure(run, fine=None) -> dict:
     worst = int(np.argmax(ratio))
     return {"ratio": float(ratio[worst]), "t": t, "err": err, "budget": budget, "terms": terms, "worst": worst,
             "max_err": float(err.max()), "oracle_max": float(np.abs(oracle_angle(t)).max()) if len(t) > 1 else 0.0}
+
+
+# -- the gate on the staged retrieval's last stage (docs/deployment.md 14.2) ----------------------
+SETTLE_ORBITS = 8.0  # the controlled run extended: the last stage (from 3.75 orbits) held 4.25 orbits
+SETTLE_FROM_ORBITS = 6.0  # the state the settling bound starts from (the 156 -> 100 m step's swing decayed)
+
+
+def retrieval_hold():
+    """The last stage's hold (l_c = 100 m) as studies/reel_hold.py's balance sees it."""
+    from studies.reel_hold import Hold
+
+    c = RETRIEVAL
+    line = c["L0"] + 1000.0  # the scene's 5 km out and 1 km stored
+    return Hold(MU, c["a"], c["M"], c["m"], c["rho"], c["EA"], line, c["J"] / c["R"] ** 2, reduced_mass(), c["lc"],
+                c["k1"], c["k2"], up=1.0)  # fmt: skip
+
+
+def settle_measure(run) -> dict:
+    """The staged retrieval's last stage against its rest length, at every output from
+    SETTLE_FROM_ORBITS on, within the closed loop's settling from the state there
+    (studies/reel_hold.settling_measure with window=True; docs/deployment.md 14.2)."""
+    from studies.reel_hold import settling_measure
+
+    h = retrieval_hold()
+    pr = profile(run)
+    dg = pd.concat([ph.diagnostics[["t_s", "eccentricity"]] for ph in run.phases], ignore_index=True)
+    ecc = dg["eccentricity"].to_numpy()[~dg["t_s"].duplicated().to_numpy()]
+    t0 = SETTLE_FROM_ORBITS * 2.0 * math.pi / omega()
+    m = settling_measure(pr, h, t0, rtol=1e-9, ecc_max=float(ecc[pr["t"] >= t0].max()), window=True)
+    m["profile"] = pr
+    return m

@@ -5,8 +5,10 @@ YES2 (Foton-M3, 25 September 2007; ESA's technical facts and the mission's recon
 the Earth at ~3 m/s on a 0.5 mm Dyneema line of ~31.7 km, from a 260-300 km orbit; the first stage
 went out to ~3.4 km, where the brake held it, and the second stage deployed fast to ~30 km.  The
 scene keeps that outline, not the flight's data: a 6.5 t spacecraft on a 280 km circular orbit, a
-14 kg end mass ejected downwards at 3 m/s with 200 m out, 0.19 g/m (the 0.5 mm line's section at
-970 kg/m^3: 6 kg over 31.7 km), EA 10 kN, damping 50 N s, rods of 2 km, paid from a drum under the
+14 kg end mass ejected radially outwards at 3 m/s with 200 m out (the scene's side "up"; the
+flight's went towards the Earth, which changes the sign of the field's P3 term in the hold's rest
+length, docs/deployment.md 11.4), 0.19 g/m (the 0.5 mm line's section at 970 kg/m^3: 6 kg over
+31.7 km), EA 10 kN, damping 50 N s, rods of 2 km, paid from a drum under the
 tension law (k1 = 4, k2 = 1) about l_c = 3.4 km, then 30 km from the start of the stage, the
 command kept above 5 mN (a brake cannot push).  Not a reproduction: the flight used a barber-pole
 brake on a spool with its own control, not this law.
@@ -50,6 +52,39 @@ def yes2_scene(*, count: int = 801):
     })  # fmt: skip
 
 
+def yes2_hold() -> "Hold":
+    """The first stage's hold as studies/reel_hold.py's balance sees it (the scene's own numbers)."""
+    from studies.reel_hold import Hold
+
+    c = YES2
+    a_m = 6378.137e3 + c["h"]
+    om = math.sqrt(MU / a_m**3)
+    mred = c["M"] * c["m"] / (c["M"] + c["m"])
+    width = 0.01 * mred * om**2 * 3.0 * c["lc1"]  # the scene's default corner (tetherlab/scene/reels.py)
+    return Hold(MU, a_m, c["M"], c["m"], c["rho"], c["EA"], c["line"], c["J"] / c["R"] ** 2, mred, c["lc1"], c["k1"],
+                c["k2"], c["tmin"], width, up=1.0)  # fmt: skip
+
+
+HOLD_ORBITS = 8.0  # the first stage held alone: ~8 e-folds of the slowest closed-loop root (0.163 Omega)
+HOLD_FROM_ORBITS = 6.0  # the state the settling bound starts from: two orbits before the end (the swing down to ~1e-3 of l)
+
+
+def yes2_hold_scene(*, orbits: float = HOLD_ORBITS, count: int = 401, rod_length: str = "6 km"):
+    """The YES2-like scene with its first stage held (no second stage) for ``orbits``.  One rod of
+    the whole line by default (no birth up to 9 km): at rest the line is straight, which one rod
+    represents with its load integrated, and the run costs 20 times fewer steps than with the
+    scene's 2 km rods, whose two-rod phase RADAU5 steps through with 82 % of its steps rejected
+    (docs/deployment.md 11.4: both settle within 0.03 m of each other)."""
+    data = yes2_scene(count=count).to_dict()
+    reel = data["tethers"]["main"]["reel"]
+    reel.pop("stages")
+    if rod_length != reel["rod_length"]:
+        reel["rod_length"] = rod_length
+        reel["birth_length"] = "9 km"
+    data["duration"] = f"{orbits} orbits"
+    return Scene.from_dict(data)
+
+
 def yes2_profile(run) -> dict:
     """Time, deployed length, rate, exit tension, in-plane angle and commanded length."""
     from tetherlab.deployment import stage_length
@@ -62,3 +97,26 @@ def yes2_profile(run) -> dict:
     return {"t": t, "L": r["deployed_length_m"].to_numpy()[keep], "v": r["speed_m_s"].to_numpy()[keep],
             "T": r["exit_tension_N"].to_numpy()[keep], "theta": dg["main.theta_rad"].to_numpy()[keep],
             "lc": [stage_length(sp, float(x)) for x in t]}  # fmt: skip
+
+
+def hold_profile(run) -> dict:
+    """t, L, v and the in-plane angle of a run (a phase's repeated first row dropped)."""
+    r = run.reel
+    dg = pd.concat([ph.diagnostics[["t_s", "main.theta_rad", "eccentricity"]] for ph in run.phases], ignore_index=True)
+    keep = ~dg["t_s"].duplicated().to_numpy()
+    return {"t": r["t_s"].to_numpy()[keep], "L": r["deployed_length_m"].to_numpy()[keep],
+            "v": r["speed_m_s"].to_numpy()[keep], "theta": dg["main.theta_rad"].to_numpy()[keep],
+            "ecc": dg["eccentricity"].to_numpy()[keep]}  # fmt: skip
+
+
+def hold_measure(run) -> dict:
+    """The held first stage against its derived equilibrium and the closed loop's settling from the
+    state at HOLD_FROM_ORBITS (docs/deployment.md 11.4, 15): studies/reel_hold.settling_measure."""
+    from studies.reel_hold import settling_measure
+
+    h = yes2_hold()
+    pr = hold_profile(run)
+    t0 = HOLD_FROM_ORBITS * 2.0 * math.pi / h.omega
+    m = settling_measure(pr, h, t0, rtol=1e-8, ecc_max=float(pr["ecc"][pr["t"] >= t0].max()))
+    m["profile"] = pr
+    return m

@@ -471,6 +471,20 @@ MUTANTS = {
             mutate=_flag(L.DEFECT_SPOOL_TORQUE_ONE_SIDED),
             path="reel",
         ),
+        # -- the tension law's hold (docs/deployment.md 11.4, 14.2): run by studies/deployment.py parts K
+        # and L beside the held YES2-like first stage and the staged retrieval, credited from their
+        # control gates.
+        Mutant(
+            "tension_3l",
+            "the tension law's 3 l_c read as 3 L: T_c = m* Omega^2 [3 L + k1 (L - l_c) + k2 L'/Omega] (the "
+            "massless rest length is still l_c; the massive line's offset is divided by k1, not k1 - 3)",
+            "tether/reel_spool.py tension_command (p[H_MUTANT] = DEFECT_TENSION_3L)",
+            "docs/deployment.md 11.4 (the rest length with a massive line, l - l_c ~ 3 rho l^2/(2 m* (k1 - 3)))",
+            ("deployment_yes2_hold_over_budget", "deployment_yes2_hold_3l_negative_control",
+             "deployment_retrieval_settle_over_budget", "deployment_retrieval_settle_3l_negative_control"),
+            mutate=_flag(L.DEFECT_TENSION_3L),
+            path="reel",
+        ),
     )
 }
 

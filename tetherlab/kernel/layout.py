@@ -41,6 +41,7 @@ DEFECT_TENSION_K2_SIGN = 29       # the tension law with the sign of its rate ga
 DEFECT_SPOOL_TORQUE_UNLIMITED = 30  # the spool's balance with the motor's unlimited torque, its outputs with the limited one (tether/reel_spool.py)
 DEFECT_SPOOL_NO_SPEED_BRAKE = 31    # the spool's balance without the regulating brake, its outputs with it (tether/reel_spool.py)
 DEFECT_SPOOL_TORQUE_ONE_SIDED = 45  # the motor's torque limit with its upper corner dropped: bent above -tau_max only (tether/reel_spool.py)
+DEFECT_TENSION_3L = 46             # the tension law's 3 l_c read as 3 L: T_c = m* Omega^2 [3 L + k1 (L - l_c) + ...] (tether/reel_spool.py)
 DEFECT_INEXT_NO_VSQ = 41          # the inextensible rod's constraint without |d'|^2 in kappa (tether/inextensible.py)
 DEFECT_WHEELS_NO_GYRO = 42        # a rigid body's gyroscopic torque without its wheels' momentum: omega x J_s omega only (bodies/rigid_body.py)
 DEFECT_REEL_RING_FULL = 43        # a reel on a rigid body whose stored ring keeps the full line's inertia as it pays out (tether/reel_hub.py)

@@ -38,6 +38,7 @@ from ..kernel.layout import (
     DEFECT_SPOOL_TORQUE_ONE_SIDED,
     DEFECT_SPOOL_TORQUE_UNLIMITED,
     DEFECT_SPOOL_UNCOUPLED,
+    DEFECT_TENSION_3L,
     DEFECT_TENSION_K2_SIGN,
     H_MUTANT,
     H_NREEL,
@@ -123,7 +124,8 @@ def tension_command(p, rb, L, Ld):
     om = p[rb + RL_OMEGA]
     lc = p[rb + RL_LC]
     k2 = -p[rb + RL_K2] if int(p[H_MUTANT]) == DEFECT_TENSION_K2_SIGN else p[rb + RL_K2]
-    tc = p[rb + RL_MSTAR] * om * om * (3.0 * lc + p[rb + RL_K1] * (L - lc) + k2 * Ld / om)
+    hold = L if int(p[H_MUTANT]) == DEFECT_TENSION_3L else lc
+    tc = p[rb + RL_MSTAR] * om * om * (3.0 * hold + p[rb + RL_K1] * (L - lc) + k2 * Ld / om)
     w = p[rb + RL_TW]
     if w > 0.0:
         lo = p[rb + RL_TMIN]

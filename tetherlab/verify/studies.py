@@ -205,6 +205,12 @@ def _deployment_gates(outdir: Path) -> dict:
         # part N: the retrieval against the reeled pendulum (studies/reel_retrieval.py, docs/deployment.md 14.1)
         "deployment_retrieval_pendulum_over_budget": g.get("deployment_retrieval_pendulum_over_budget"),
         "deployment_retrieval_pendulum_frozen_negative_control": g.get("deployment_retrieval_pendulum_frozen_negative_control"),
+        # part K: the YES2-like first stage held (studies/reel_yes2.py, docs/deployment.md 11.4)
+        "deployment_yes2_hold_over_budget": g.get("deployment_yes2_hold_over_budget"),
+        "deployment_yes2_hold_3l_negative_control": g.get("deployment_yes2_hold_3l_negative_control"),
+        # part L: the staged retrieval's last stage settling (studies/reel_retrieval.py, docs/deployment.md 14.2)
+        "deployment_retrieval_settle_over_budget": g.get("deployment_retrieval_settle_over_budget"),
+        "deployment_retrieval_settle_3l_negative_control": g.get("deployment_retrieval_settle_3l_negative_control"),
     }
 
 
