@@ -202,7 +202,7 @@ def tension_run(defect: int = 0):
 SEDS = dict(h=400e3, M=1000.0, m=25.0, line=20e3, L0=200.0, rho=3.5e-4, EA=2e4, v0=1.6, brake=0.05)
 
 
-def seds_scene(*, count=481):
+def seds_scene(*, count=481, rod_length="2 km", rtol=1e-8):
     """SEDS-like (Small Expendable Deployer System; SEDS-1, 1993): a 1 t stage on a 400 km circular
     orbit ejects a 25 kg end mass downwards at 1.6 m/s on a 20 km line of 0.35 g/m (7 kg; EA 20 kN,
     damping 50 N s) paid out of a canister through a passive friction brake (Coulomb 0.05 N,
@@ -210,7 +210,9 @@ def seds_scene(*, count=481):
     out (the event reel.main.spent, at 68 min).  The outputs cover 80 min, every 10 s: the
     deployment's end is a located event, not known ahead, so the duration only has to pass it
     (by the reduced model's 68.3 min, docs/deployment.md 12.1, plus a margin); a brake that made it
-    last longer would end the run without the event, which part J reports as a failure."""
+    last longer would end the run without the event, which part J reports as a failure.
+    ``rod_length`` and ``rtol`` are the comparison's other levels (docs/deployment.md 12.2: the
+    rods' discretisation and the integrator's error, each from a twin run)."""
     c = SEDS
     a_m = 6378.137e3 + c["h"]
     return Scene.from_dict({
@@ -221,10 +223,10 @@ def seds_scene(*, count=481):
         "tethers": {"main": {
             "from": "m0", "to": "mf", "length": f"{c['L0']} m", "EA": f"{c['EA']} N", "linear_density": f"{c['rho']} kg/m",
             "damping": "50 N s", "model": "energy", "initial": {"shape": "straight", "theta": "0 deg"},
-            "reel": {"law": "spool", "exit": "canister", "speed": f"{c['v0']} m/s", "rod_length": "2 km",
+            "reel": {"law": "spool", "exit": "canister", "speed": f"{c['v0']} m/s", "rod_length": rod_length,
                      "retire_length": "100 m", "stored_length": f"{c['line'] - c['L0']} m",
                      "coulomb_friction": f"{c['brake']} N", "friction_speed": "0.01 m/s"}}},
-        "integrator": {"method": "radau5", "rtol": 1e-8, "atol": 1e-8},
+        "integrator": {"method": "radau5", "rtol": rtol, "atol": rtol},
         "output": {"count": count},
     })  # fmt: skip
 
