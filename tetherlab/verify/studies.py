@@ -205,6 +205,9 @@ def _deployment_gates(outdir: Path) -> dict:
         # part N: the retrieval against the reeled pendulum (studies/reel_retrieval.py, docs/deployment.md 14.1)
         "deployment_retrieval_pendulum_over_budget": g.get("deployment_retrieval_pendulum_over_budget"),
         "deployment_retrieval_pendulum_frozen_negative_control": g.get("deployment_retrieval_pendulum_frozen_negative_control"),
+        # part J: the SEDS-like deployment against the reduced model (studies/seds_reduced.py, docs/deployment.md 12.2)
+        "deployment_seds_reduced_over_budget": g.get("deployment_seds_reduced_over_budget"),
+        "deployment_seds_canister_negative_control": g.get("deployment_seds_canister_negative_control"),
     }
 
 
