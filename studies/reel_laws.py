@@ -237,3 +237,25 @@ def seds_profile(run) -> dict:
     dg = pd.concat([ph.diagnostics[["main.theta_rad"]] for ph in run.phases], ignore_index=True)
     return {"t": r["t_s"].to_numpy(), "L": r["deployed_length_m"].to_numpy(), "v": r["speed_m_s"].to_numpy(),
             "T": r["exit_tension_N"].to_numpy(), "theta": dg["main.theta_rad"].to_numpy()}
+
+
+def seds_energy(run) -> dict:
+    """The energy balance of a canister run in a central field without the orbit's share
+    (docs/deployment.md 12.3): J = E + K_s + W_b + W_loss - Omega_0 H_z per output, Omega_0 the
+    circular orbit's rate; exactly constant for the model (E + K_s + W_b + W_loss by (10.3), H_z
+    because the field is central and the exit's forces internal), and stationary at the circular
+    orbit, so the integrator's first-order error on the orbit, which E alone carries, cancels.
+    Returns the times (each once), J - J(0), the Richardson estimate of the works' quadrature on the
+    outputs (11.2), the round-off scale |E| + Omega_0 |H_z| and E_H = E - Omega_0 H_z + (3/2) mu M/a,
+    the Hill-frame energy of the relative motion."""
+    c = SEDS
+    a_m = 6378.137e3 + c["h"]
+    om = math.sqrt(MU / a_m**3)
+    total, est = spool_energy(run)
+    inv = run.invariants.reset_index(drop=True)
+    e, hz = inv["energy_J"].to_numpy(), inv["angmom_z_kg_m2_s"].to_numpy()
+    j = total - om * hz
+    t, first = np.unique(inv["t_s"].to_numpy(), return_index=True)  # a birth's time is reported twice
+    m_tot = c["M"] + c["m"] + c["rho"] * c["line"]
+    return {"t": t, "drift": (j - j[0])[first], "quadrature": est, "orbit_drift": float(np.abs(total - total[0]).max()),
+            "scale": float(np.max(np.abs(e) + om * np.abs(hz))), "hill": (e - om * hz + 1.5 * MU * m_tot / a_m)[first]}

@@ -275,7 +275,8 @@ def mutation_summary(cells, gates: dict, study_values: dict):
           "deployment_limits_energy_over_bound")),
         ("deployment_limits_one_sided_negative_control", "spool_torque_one_sided",
          ("deployment_limits_torque_over_budget",)),
-        ("deployment_seds_canister_negative_control", "canister_as_drum", ("deployment_seds_reduced_over_budget",)),
+        ("deployment_seds_canister_negative_control", "canister_as_drum",
+         ("deployment_seds_reduced_over_budget", "deployment_seds_energy_over_bound")),
     ):  # fmt: skip
         ctrl = study_values.get(ctrl_gate)
         if ctrl is not None and ctrl <= gates[ctrl_gate]["threshold"]:

@@ -207,6 +207,7 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_retrieval_pendulum_frozen_negative_control": g.get("deployment_retrieval_pendulum_frozen_negative_control"),
         # part J: the SEDS-like deployment against the reduced model (studies/seds_reduced.py, docs/deployment.md 12.2)
         "deployment_seds_reduced_over_budget": g.get("deployment_seds_reduced_over_budget"),
+        "deployment_seds_energy_over_bound": g.get("deployment_seds_energy_over_bound"),
         "deployment_seds_canister_negative_control": g.get("deployment_seds_canister_negative_control"),
     }
 
