@@ -110,7 +110,7 @@ def bow(p: dict) -> dict:
     the straight line's rotation leaves unbalanced, q(x) = rho (-3 Omega^2 x sin cos - x theta''
     - 2 (l' - sigma') omega) at its largest (linear in x: at an end), on a string of the effective
     tension T - rho l'^2 (the material moving along the curve at l'); y_max <= q l^2 T_max / (8
-    T_min^2), |y'| <= 2 q l / T_min; the axial loads' resultant P = int |T'| ds."""
+    T_min^2), |y'| <= q l (1 + T_max/(2 T_min)) / T_min; the axial loads' resultant P = int |T'| ds."""
     k = constants()
     rho, om = k["rho"], k["om"]
     l = p["l"]
@@ -126,7 +126,8 @@ def bow(p: dict) -> dict:
     load = np.abs(np.diff(T))
     if t_min <= 0.0:
         return {"y": math.inf, "slope": math.inf, "P": float(load.sum()), "t_min": t_min, "T_max": float(T.max())}
-    return {"y": q * l * l * t_max / (8 * t_min**2), "slope": 2 * q * l / t_min, "P": float(load.sum()),
+    slope = q * l * (1 + t_max / (2 * t_min)) / t_min
+    return {"y": q * l * l * t_max / (8 * t_min**2), "slope": slope, "P": float(load.sum()),
             "t_min": t_min, "T_max": float(T.max()), "q": q}  # fmt: skip
 
 
