@@ -46,8 +46,13 @@ I. The reel as a dynamical system (studies/reel_laws.py, docs/deployment.md 10-1
    + 3 (k1 - 3). Controls: the exit tension's coupling with L'' dropped (DEFECT_SPOOL_UNCOUPLED)
    must fail the first two, the sign of k2 flipped (DEFECT_TENSION_K2_SIGN) the third.
 J. A SEDS-like deployment (studies/reel_laws.py seds_scene): 20 km from a canister through a
-   passive friction brake to a 25 kg end mass from 400 km, run to the end of the line; no gate
-   (no published profile is reproduced), the swing angle and tension profile as figures.
+   passive friction brake to a 25 kg end mass from 400 km, run to the end of the line; the swing
+   angle and tension profile as figures. The angle and the length against the independent
+   reduced model (studies/seds_reduced.py) at every output while its line's bow is bounded
+   (l <= 5 km), within a budget derived term by term (docs/deployment.md 12.2: the field's P3
+   term, the bow, the strain through the reduced model's linearisation; the rods by Richardson
+   against rods of 4 km; twice the difference from the run at rtol 1e-9). Control: a canister's
+   exit jump taken as a drum's (DEFECT_CANISTER_AS_DRUM).
 K. A YES2-like two-stage deployment (studies/reel_yes2.py): the tension law in stages, l_c = 3.4 km
    then 30 km (docs/deployment.md 10.6, 15); length, rate, tension, in-plane angle and the commanded
    length in a figure. Its first stage held alone for 8 orbits: the last output's length against the
@@ -507,18 +512,67 @@ def part_spool():
 
 
 def part_seds():
-    """J: the SEDS-like deployment to the end of its line (no gate)."""
+    """J: the SEDS-like deployment to the end of its line, against the reduced model of
+    docs/deployment.md 12.1 within the budget of 12.2 over the window where the line's bow is
+    bounded; control: a canister's exit jump taken as a drum's (DEFECT_CANISTER_AS_DRUM)."""
     from studies import reel_laws as RL
+    from studies import seds_reduced as SR
+    from tetherlab.model.params import DEFECT_CANISTER_AS_DRUM
 
-    run = simulate_reel(RL.seds_scene(), progress=False, raise_on_failure=False)
-    if run.stopped_by != "reel.main.spent":
-        raise RuntimeError(f"part J: the deployment did not reach the end of its line: {run.message}")
-    prof = RL.seds_profile(run)
-    births = sum(c["change"] == "birth" for c in run.changes)
-    rows = [{"case": "J SEDS-like: end of deployment (20 km)", "value": float(prof["t"][-1] / 60.0), "unit": "min",
-             "note": f"swing angle {math.degrees(prof['theta'][-1]):.1f} deg, speed {prof['v'][-1]:.1f} m/s, "
-                     f"tension {prof['T'][-1]:.3f} N at the end; {births} births; no gate"}]  # fmt: skip
-    return rows, {}, prof
+    def profile(defect=0, **kw):
+        run = simulate_reel(RL.seds_scene(**kw), defect=defect, progress=False, raise_on_failure=False)
+        if run.stopped_by != "reel.main.spent":
+            raise RuntimeError(f"part J: the deployment {kw or ''} did not reach the end of its line: {run.message}")
+        return run, RL.seds_profile(run)
+
+    run, prof = profile()
+    fine_run, fine = profile(rtol=1e-9)  # the integrator's terms
+    coarse = profile(rod_length="4 km")[1]  # the rods' term (Richardson)
+    m = SR.seds_measure(prof, fine, coarse)
+    en, en_fine = RL.seds_energy(run), RL.seds_energy(fine_run)
+    # 12.3: the works' quadrature (twice its Richardson estimate), the integrator (twice the
+    # difference from the rtol 1e-9 twin) and the round-off of E - Omega_0 H_z
+    twin = np.abs(en["drift"] - np.interp(en["t"], en_fine["t"], en_fine["drift"]))
+    e_bound = 2.0 * en["quadrature"] + 2.0 * float(twin.max()) + 100.0 * EPS * en["scale"]
+    e_err = float(np.abs(en["drift"]).max())
+    ctrl = simulate_reel(RL.seds_scene(), defect=DEFECT_CANISTER_AS_DRUM, progress=False, raise_on_failure=False)
+    # a control that stops before the window's end shows no teeth: its gate then fails
+    reached = ctrl.ok and ctrl.reel["t_s"].iloc[-1] >= m["t_window"]
+    c = SR.seds_measure(RL.seds_profile(ctrl), None, None) if reached else None
+    if c is not None:
+        ce = RL.seds_energy(ctrl)
+        c_energy = float(np.abs(ce["drift"]).max()) / (2.0 * ce["quadrature"] + 100.0 * EPS * ce["scale"])
+        c_ratio = min(c["ratio"], c_energy)  # it must fail both gates
+    else:
+        c_ratio = 0.0
+    births = sum(ch["change"] == "birth" for ch in run.changes)
+    th, ln = m["theta"], m["L"]
+    i, j = th["worst"], ln["worst"]
+    parts = ", ".join(f"{k} {math.degrees(v[i]):.2g}" for k, v in m["terms"]["theta"].items())
+    rows = [
+        {"case": "J SEDS-like: end of deployment (20 km)", "value": float(prof["t"][-1] / 60.0), "unit": "min",
+         "note": f"reduced model {m['t_end_reduced'] / 60.0:.2f} min; swing angle {math.degrees(prof['theta'][-1]):.2f} deg, "
+                 f"speed {prof['v'][-1]:.1f} m/s, tension {prof['T'][-1]:.3f} N at the end; {births} births"},
+        {"case": "J SEDS-like vs reduced model: worst |theta - theta_r| / budget(t)", "value": th["ratio"], "bound": 1.0,
+         "over bound": th["ratio"], "unit": "1",
+         "note": f"window t <= {m['t_window']:.0f} s (l <= {m['l_window']:.0f} m); at t = {m['t'][i]:.0f} s "
+                 f"{math.degrees(th['err'][i]):.2g} deg against {math.degrees(th['budget'][i]):.2g} ({parts} deg)"},
+        {"case": "J SEDS-like vs reduced model: worst |L - l_r| / budget(t)", "value": ln["ratio"], "bound": 1.0,
+         "over bound": ln["ratio"], "unit": "1",
+         "note": f"at t = {m['t'][j]:.0f} s {ln['err'][j]:.3g} m against {ln['budget'][j]:.3g} m; at the window's end "
+                 f"{ln['err'][-1]:.3g} m against {ln['budget'][-1]:.3g} m"},
+        {"case": "J SEDS-like: max |E + W_b + W_loss - Omega_0 H_z - (0)|", "value": e_err, "bound": e_bound,
+         "over bound": e_err / e_bound, "unit": "J",
+         "note": f"(10.3) without the orbit's share (12.3), which drifts {en['orbit_drift']:.0f} J with it; the Hill-frame energy of the relative motion goes {en['hill'][0]:.0f} -> {en['hill'][-1]:.0f} J; "
+                 f"brake {float(run.reel['brake_work_J'].iloc[-1]):.0f} J, exit loss {float(run.reel['exit_loss_J'].iloc[-1]):.0f} J"},
+        {"case": "control canister's jump taken as a drum's: weakest of the comparison and the energy over bound",
+         "value": c_ratio, "bound": 1.0, "over bound": c_ratio, "unit": "1",
+         "note": "must exceed 1" + (f": angle {c['theta']['ratio']:.3g}x, length {c['L']['ratio']:.3g}x, "
+                                    f"energy {c_energy:.3g}x" if c else "")},
+    ]  # fmt: skip
+    gates = {"deployment_seds_reduced_over_budget": m["ratio"], "deployment_seds_energy_over_bound": e_err / e_bound,
+             "deployment_seds_canister_negative_control": 1.0 / c_ratio if c_ratio > 0 else math.inf}
+    return rows, gates, prof
 
 
 def part_yes2():

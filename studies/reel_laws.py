@@ -202,7 +202,7 @@ def tension_run(defect: int = 0):
 SEDS = dict(h=400e3, M=1000.0, m=25.0, line=20e3, L0=200.0, rho=3.5e-4, EA=2e4, v0=1.6, brake=0.05)
 
 
-def seds_scene(*, count=481):
+def seds_scene(*, count=481, rod_length="2 km", rtol=1e-8):
     """SEDS-like (Small Expendable Deployer System; SEDS-1, 1993): a 1 t stage on a 400 km circular
     orbit ejects a 25 kg end mass downwards at 1.6 m/s on a 20 km line of 0.35 g/m (7 kg; EA 20 kN,
     damping 50 N s) paid out of a canister through a passive friction brake (Coulomb 0.05 N,
@@ -210,7 +210,9 @@ def seds_scene(*, count=481):
     out (the event reel.main.spent, at 68 min).  The outputs cover 80 min, every 10 s: the
     deployment's end is a located event, not known ahead, so the duration only has to pass it
     (by the reduced model's 68.3 min, docs/deployment.md 12.1, plus a margin); a brake that made it
-    last longer would end the run without the event, which part J reports as a failure."""
+    last longer would end the run without the event, which part J reports as a failure.
+    ``rod_length`` and ``rtol`` are the comparison's other levels (docs/deployment.md 12.2: the
+    rods' discretisation and the integrator's error, each from a twin run)."""
     c = SEDS
     a_m = 6378.137e3 + c["h"]
     return Scene.from_dict({
@@ -221,10 +223,10 @@ def seds_scene(*, count=481):
         "tethers": {"main": {
             "from": "m0", "to": "mf", "length": f"{c['L0']} m", "EA": f"{c['EA']} N", "linear_density": f"{c['rho']} kg/m",
             "damping": "50 N s", "model": "energy", "initial": {"shape": "straight", "theta": "0 deg"},
-            "reel": {"law": "spool", "exit": "canister", "speed": f"{c['v0']} m/s", "rod_length": "2 km",
+            "reel": {"law": "spool", "exit": "canister", "speed": f"{c['v0']} m/s", "rod_length": rod_length,
                      "retire_length": "100 m", "stored_length": f"{c['line'] - c['L0']} m",
                      "coulomb_friction": f"{c['brake']} N", "friction_speed": "0.01 m/s"}}},
-        "integrator": {"method": "radau5", "rtol": 1e-8, "atol": 1e-8},
+        "integrator": {"method": "radau5", "rtol": rtol, "atol": rtol},
         "output": {"count": count},
     })  # fmt: skip
 
@@ -235,3 +237,25 @@ def seds_profile(run) -> dict:
     dg = pd.concat([ph.diagnostics[["main.theta_rad"]] for ph in run.phases], ignore_index=True)
     return {"t": r["t_s"].to_numpy(), "L": r["deployed_length_m"].to_numpy(), "v": r["speed_m_s"].to_numpy(),
             "T": r["exit_tension_N"].to_numpy(), "theta": dg["main.theta_rad"].to_numpy()}
+
+
+def seds_energy(run) -> dict:
+    """The energy balance of a canister run in a central field without the orbit's share
+    (docs/deployment.md 12.3): J = E + K_s + W_b + W_loss - Omega_0 H_z per output, Omega_0 the
+    circular orbit's rate; exactly constant for the model (E + K_s + W_b + W_loss by (10.3), H_z
+    because the field is central and the exit's forces internal), and stationary at the circular
+    orbit, so the integrator's first-order error on the orbit, which E alone carries, cancels.
+    Returns the times (each once), J - J(0), the Richardson estimate of the works' quadrature on the
+    outputs (11.2), the round-off scale |E| + Omega_0 |H_z| and E_H = E - Omega_0 H_z + (3/2) mu M/a,
+    the Hill-frame energy of the relative motion."""
+    c = SEDS
+    a_m = 6378.137e3 + c["h"]
+    om = math.sqrt(MU / a_m**3)
+    total, est = spool_energy(run)
+    inv = run.invariants.reset_index(drop=True)
+    e, hz = inv["energy_J"].to_numpy(), inv["angmom_z_kg_m2_s"].to_numpy()
+    j = total - om * hz
+    t, first = np.unique(inv["t_s"].to_numpy(), return_index=True)  # a birth's time is reported twice
+    m_tot = c["M"] + c["m"] + c["rho"] * c["line"]
+    return {"t": t, "drift": (j - j[0])[first], "quadrature": est, "orbit_drift": float(np.abs(total - total[0]).max()),
+            "scale": float(np.max(np.abs(e) + om * np.abs(hz))), "hill": (e - om * hz + 1.5 * MU * m_tot / a_m)[first]}

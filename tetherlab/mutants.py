@@ -485,6 +485,19 @@ MUTANTS = {
             mutate=_flag(L.DEFECT_TENSION_3L),
             path="reel",
         ),
+        # -- run by studies/deployment.py part J beside the SEDS-like deployment, credited from its control gate
+        Mutant(
+            "canister_as_drum",
+            "a canister's exit jump taken as a drum's: the spool balance with j = rho L'^2 eps in place of "
+            "rho L'^2 (1 + eps) (the stored line treated as already moving at the line's speed)",
+            "tether/reel_spool.py spool_forces (p[H_MUTANT] = DEFECT_CANISTER_AS_DRUM)",
+            "docs/deployment.md 4 and 10.1 (the canister's material is at rest in the body and is jerked to the "
+            "line's speed in the exit); 12.2 (the reduced model's exit tension rho l'^2 + F_b), 12.3 (the energy)",
+            ("deployment_seds_reduced_over_budget", "deployment_seds_energy_over_bound",
+             "deployment_seds_canister_negative_control"),
+            mutate=_flag(L.DEFECT_CANISTER_AS_DRUM),
+            path="reel",
+        ),
     )
 }
 

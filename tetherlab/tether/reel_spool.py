@@ -34,6 +34,7 @@ import numpy as np
 
 from .._jit import njit
 from ..kernel.layout import (
+    DEFECT_CANISTER_AS_DRUM,
     DEFECT_SPOOL_NO_SPEED_BRAKE,
     DEFECT_SPOOL_TORQUE_ONE_SIDED,
     DEFECT_SPOOL_TORQUE_UNLIMITED,
@@ -167,6 +168,8 @@ def spool_forces(p, i, L, Ld, eps):
     else:
         ms = 0.0
         jump = rho * Ld * Ld * (1.0 + eps)
+        if int(p[H_MUTANT]) == DEFECT_CANISTER_AS_DRUM:  # negative control of the SEDS-like comparison
+            jump = rho * Ld * Ld * eps
     fr = p[rb + RL_CV] * Ld
     vs = p[rb + RL_VS]
     if p[rb + RL_FC] > 0.0:

@@ -277,6 +277,8 @@ def mutation_summary(cells, gates: dict, study_values: dict):
          ("deployment_limits_torque_over_budget",)),
         ("deployment_yes2_hold_3l_negative_control", "tension_3l", ("deployment_yes2_hold_over_budget",)),
         ("deployment_retrieval_settle_3l_negative_control", "tension_3l", ("deployment_retrieval_settle_over_budget",)),
+        ("deployment_seds_canister_negative_control", "canister_as_drum",
+         ("deployment_seds_reduced_over_budget", "deployment_seds_energy_over_bound")),
     ):  # fmt: skip
         ctrl = study_values.get(ctrl_gate)
         if ctrl is not None and ctrl <= gates[ctrl_gate]["threshold"]:

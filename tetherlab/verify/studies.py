@@ -211,6 +211,10 @@ def _deployment_gates(outdir: Path) -> dict:
         # part L: the staged retrieval's last stage settling (studies/reel_retrieval.py, docs/deployment.md 14.2)
         "deployment_retrieval_settle_over_budget": g.get("deployment_retrieval_settle_over_budget"),
         "deployment_retrieval_settle_3l_negative_control": g.get("deployment_retrieval_settle_3l_negative_control"),
+        # part J: the SEDS-like deployment against the reduced model (studies/seds_reduced.py, docs/deployment.md 12.2)
+        "deployment_seds_reduced_over_budget": g.get("deployment_seds_reduced_over_budget"),
+        "deployment_seds_energy_over_bound": g.get("deployment_seds_energy_over_bound"),
+        "deployment_seds_canister_negative_control": g.get("deployment_seds_canister_negative_control"),
     }
 
 
