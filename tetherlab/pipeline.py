@@ -110,7 +110,8 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
     Prepared of the run's first phase (its reference orbit)}; the state is left to the caller."""
     from .resources import check_scene
 
-    check_scene(scene, outputs_in_memory=outputs_in_memory, out_dir=out_dir)
+    if reel_phase is None:  # a later phase's outputs are part of the run the first phase checked
+        check_scene(scene, outputs_in_memory=outputs_in_memory, out_dir=out_dir)
     # a scene continuing a finished run starts from its final state and time (continuation.py)
     start = None
     if scene.continue_from is not None:
