@@ -413,39 +413,30 @@ def integrated_tables(reel_df: pd.DataFrame, inv_df: pd.DataFrame) -> None:
     energy gate): ``exit_work_J`` and ``energy_plus_exit_work_J`` to the invariants, ``carnot_J``
     to the reel table.  A phase's first row repeats its predecessor's last time (the same instant
     in the next layout), so no interval spans two phases."""
-    work = np.zeros(len(inv_df))
-    acc = 0.0
-    prev = None
-    for idx, row in enumerate(inv_df.itertuples()):
-        if prev is not None and row.phase == prev.phase:
-            acc += 0.5 * (row.exit_power_W + prev.exit_power_W) * (row.t_s - prev.t_s)
-        work[idx] = acc
-        prev = row
+    # each interval's trapezoid, 0 across a phase change, summed in row order (np.cumsum adds
+    # left to right: the same sums as a loop over the rows)
+    work = _trapezoid_sums(inv_df["t_s"].to_numpy(), inv_df["exit_power_W"].to_numpy(), inv_df["phase"].to_numpy())
     inv_df["exit_work_J"] = work
     inv_df["energy_plus_exit_work_J"] = inv_df["energy_J"] + work
     carnot = np.zeros(len(reel_df))
     for _, part in reel_df.groupby("reel", sort=False):
-        c = 0.0
-        tt = part["t_s"].to_numpy()
-        cp = part["carnot_power_W"].to_numpy()
-        phs = part["phase"].to_numpy()
-        vals = np.zeros(len(part))
-        for j in range(1, len(part)):
-            if phs[j] == phs[j - 1]:
-                c += 0.5 * (cp[j] + cp[j - 1]) * (tt[j] - tt[j - 1])
-            vals[j] = c
-        carnot[part.index.to_numpy()] = vals
+        tt, cp, phs = (part[c].to_numpy() for c in ("t_s", "carnot_power_W", "phase"))
+        carnot[part.index.to_numpy()] = _trapezoid_sums(tt, cp, phs)
     reel_df["carnot_J"] = carnot
     # a spool law's brake work and exit loss, integrated as the exit work (docs/deployment.md 10.3)
     for col, power in (("brake_work_J", "brake_power_W"), ("exit_loss_J", "exit_loss_power_W")):
         vals = np.zeros(len(reel_df))
         for _, part in reel_df.groupby("reel", sort=False):
             tt, pw, phs = (part[c].to_numpy() for c in ("t_s", power, "phase"))
-            acc_ = np.zeros(len(part))
-            for j in range(1, len(part)):
-                acc_[j] = acc_[j - 1] + (0.5 * (pw[j] + pw[j - 1]) * (tt[j] - tt[j - 1]) if phs[j] == phs[j - 1] else 0.0)
-            vals[part.index.to_numpy()] = acc_
+            vals[part.index.to_numpy()] = _trapezoid_sums(tt, pw, phs)
         reel_df[col] = vals
+
+
+def _trapezoid_sums(t, power, phase) -> np.ndarray:
+    """The running trapezoid integral of ``power`` over the rows, each interval inside a phase
+    (an interval across a phase change adds 0: its ends are the same instant)."""
+    inc = np.where(phase[1:] == phase[:-1], 0.5 * (power[1:] + power[:-1]) * (t[1:] - t[:-1]), 0.0)
+    return np.cumsum(np.concatenate([[0.0], inc])) if len(t) else np.zeros(0)
 
 
 class MemoryPhases:
