@@ -372,9 +372,11 @@ def p_view(p):
     return ParamView(p)
 
 
-def phase_tables(tethers, ph: int, rods: dict, t, out, d) -> tuple[list, pd.DataFrame]:
-    """A phase's rows of the reel table (one frame per reel) and of the invariants, from the
-    kernel's reel rows ``out`` and the diagnostics ``d`` (:func:`_rows`)."""
+def phase_rows(tethers, ph: int, rods: dict, t, out, d) -> tuple[list, dict]:
+    """A phase's rows of the reel table (one dict of columns per reel) and of the invariants, as
+    arrays (the phase, reel and rod count as scalars), from the kernel's reel rows ``out`` and the
+    diagnostics ``d`` (:func:`_rows`).  No frame is built per phase: :func:`rows_frame` makes one
+    table of all the phases' dicts at the end of the run (docs/deployment.md 8d)."""
     from .tether.reel_diagnostics import REEL_COLUMNS
 
     g = d["global"]
@@ -384,7 +386,7 @@ def phase_tables(tethers, ph: int, rods: dict, t, out, d) -> tuple[list, pd.Data
         for c, name in enumerate(REEL_COLUMNS):
             cols[name] = out[:, i, c]
         cols["stored_length_m"] = tt.length_m + tt.reel.stored_length_m - out[:, i, 0]
-        reel_parts.append(pd.DataFrame(cols))
+        reel_parts.append(cols)
     corr = out[:, :, 9:16].sum(axis=1)
     inv = {"t_s": t, "phase": ph}
     for j, ax in enumerate("xyz"):
@@ -394,7 +396,32 @@ def phase_tables(tethers, ph: int, rods: dict, t, out, d) -> tuple[list, pd.Data
     inv["kinetic_J"] = g[:, diag.G_KE] + corr[:, 6]
     inv["energy_J"] = g[:, diag.G_E] + corr[:, 6]
     inv["exit_power_W"] = out[:, :, 7].sum(axis=1)
-    return reel_parts, pd.DataFrame(inv)
+    return reel_parts, inv
+
+
+def rows_frame(parts: list) -> pd.DataFrame:
+    """One table of :func:`phase_rows`' dicts in order (every dict has the same columns), as
+    ``pd.concat([pd.DataFrame(p) for p in parts], ignore_index=True)`` gives it, the dtypes
+    included, with one frame built instead of one a phase and reel."""
+    if not parts:
+        return pd.DataFrame()
+    sizes = [len(np.asarray(p["t_s"])) for p in parts]
+    cols = {}
+    for name, first in parts[0].items():
+        if isinstance(first, str):
+            cols[name] = np.array([p[name] for p, n in zip(parts, sizes) for _ in range(n)], dtype=object)
+        elif isinstance(first, (int, np.integer)):
+            cols[name] = np.repeat(np.array([p[name] for p in parts], dtype=np.int64), sizes)
+        else:
+            cols[name] = np.concatenate([np.asarray(p[name], dtype=float) for p in parts])
+    return pd.DataFrame(cols)
+
+
+def phase_tables(tethers, ph: int, rods: dict, t, out, d) -> tuple[list, pd.DataFrame]:
+    """A phase's rows of the reel table (one frame per reel) and of the invariants
+    (:func:`phase_rows` as frames: the run store writes each phase's parts as it ends)."""
+    reel_parts, inv = phase_rows(tethers, ph, rods, t, out, d)
+    return [pd.DataFrame(c) for c in reel_parts], pd.DataFrame(inv)
 
 
 def integrated_tables(reel_df: pd.DataFrame, inv_df: pd.DataFrame) -> None:
@@ -403,45 +430,37 @@ def integrated_tables(reel_df: pd.DataFrame, inv_df: pd.DataFrame) -> None:
     energy gate): ``exit_work_J`` and ``energy_plus_exit_work_J`` to the invariants, ``carnot_J``
     to the reel table.  A phase's first row repeats its predecessor's last time (the same instant
     in the next layout), so no interval spans two phases."""
-    work = np.zeros(len(inv_df))
-    acc = 0.0
-    prev = None
-    for idx, row in enumerate(inv_df.itertuples()):
-        if prev is not None and row.phase == prev.phase:
-            acc += 0.5 * (row.exit_power_W + prev.exit_power_W) * (row.t_s - prev.t_s)
-        work[idx] = acc
-        prev = row
+    # each interval's trapezoid, 0 across a phase change, summed in row order (np.cumsum adds
+    # left to right: the same sums as a loop over the rows)
+    work = _trapezoid_sums(inv_df["t_s"].to_numpy(), inv_df["exit_power_W"].to_numpy(), inv_df["phase"].to_numpy())
     inv_df["exit_work_J"] = work
     inv_df["energy_plus_exit_work_J"] = inv_df["energy_J"] + work
     carnot = np.zeros(len(reel_df))
     for _, part in reel_df.groupby("reel", sort=False):
-        c = 0.0
-        tt = part["t_s"].to_numpy()
-        cp = part["carnot_power_W"].to_numpy()
-        phs = part["phase"].to_numpy()
-        vals = np.zeros(len(part))
-        for j in range(1, len(part)):
-            if phs[j] == phs[j - 1]:
-                c += 0.5 * (cp[j] + cp[j - 1]) * (tt[j] - tt[j - 1])
-            vals[j] = c
-        carnot[part.index.to_numpy()] = vals
+        tt, cp, phs = (part[c].to_numpy() for c in ("t_s", "carnot_power_W", "phase"))
+        carnot[part.index.to_numpy()] = _trapezoid_sums(tt, cp, phs)
     reel_df["carnot_J"] = carnot
     # a spool law's brake work and exit loss, integrated as the exit work (docs/deployment.md 10.3)
     for col, power in (("brake_work_J", "brake_power_W"), ("exit_loss_J", "exit_loss_power_W")):
         vals = np.zeros(len(reel_df))
         for _, part in reel_df.groupby("reel", sort=False):
             tt, pw, phs = (part[c].to_numpy() for c in ("t_s", power, "phase"))
-            acc_ = np.zeros(len(part))
-            for j in range(1, len(part)):
-                acc_[j] = acc_[j - 1] + (0.5 * (pw[j] + pw[j - 1]) * (tt[j] - tt[j - 1]) if phs[j] == phs[j - 1] else 0.0)
-            vals[part.index.to_numpy()] = acc_
+            vals[part.index.to_numpy()] = _trapezoid_sums(tt, pw, phs)
         reel_df[col] = vals
 
 
+def _trapezoid_sums(t, power, phase) -> np.ndarray:
+    """The running trapezoid integral of ``power`` over the rows, each interval inside a phase
+    (an interval across a phase change adds 0: its ends are the same instant)."""
+    inc = np.where(phase[1:] == phase[:-1], 0.5 * (power[1:] + power[:-1]) * (t[1:] - t[:-1]), 0.0)
+    return np.cumsum(np.concatenate([[0.0], inc])) if len(t) else np.zeros(0)
+
+
 class MemoryPhases:
-    """The phases of :func:`run_phases` kept in memory (``simulate``): one Result per phase, the
-    reel and invariant rows.  The run store's counterpart, written to a run directory as it goes,
-    is tetherlab/reelstore.py; both answer the same four calls."""
+    """The phases of :func:`run_phases` kept in memory (``simulate``): one Result per phase (built
+    when first read: :class:`~tetherlab.result.DeferredResult`), the reel and invariant rows as
+    arrays (one table each at the end: :func:`rows_frame`).  The run store's counterpart, written
+    to a run directory as it goes, is tetherlab/reelstore.py; both answer the same four calls."""
 
     resume = None  # a loop state to continue from (the run store's checkpoint); None: from the start
     prepare_options: dict = {}
@@ -459,9 +478,15 @@ class MemoryPhases:
         return run_segments(prep, segment_plan(prep, p), update), p
 
     def end_phase(self, loop: dict, prep, res, stats: dict, message: str, p, d, reel_parts, inv) -> None:
-        from .result import Result
+        from functools import partial
 
-        self.phases.append(Result.from_run(self.scene, prep, res.t, res.y, d, stats, res.status, message, p))
+        from .result import DeferredResult, Result
+
+        # the model's parameters are written again before the next phase when it goes on with the
+        # same model (a table knot or a stage: set_stage), so the Result is built from a copy
+        prep = replace(prep, model=replace(prep.model, p=prep.model.p.copy()))
+        build = partial(Result.from_run, self.scene, prep, res.t, res.y, d, stats, res.status, message, p)
+        self.phases.append(DeferredResult(build, stats, res.status, message))
         self.reel_parts.extend(reel_parts)
         self.inv_parts.append(inv)
 
@@ -520,7 +545,7 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
             res, p = sink.run_phase(loop, prep, prep.model.fresh_params(), update)
             stats, msg = run_outcome(prep, res, p, 0.0)
             out, d, _ = _rows(prep.model, res.t, res.y)
-            reel_parts, inv = phase_tables(tethers, ph, state, res.t, out, d)
+            reel_parts, inv = phase_rows(tethers, ph, state, res.t, out, d)
             sink.end_phase(loop, prep, res, stats, msg, p, d, reel_parts, inv)
             spool_change = _spool_change(stats.get("stopped_by"), tethers) if res.status == 0 else None
             if spool_change is not None:  # a spool law's first rod reached a bound: located, the phase ends there
@@ -592,8 +617,8 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
     sink = MemoryPhases(scene)
     status, message, stopped, changes = run_phases(scene, sink, progress=progress, defect=defect,
                                                   remap_defect=remap_defect)
-    reel_df = pd.concat(sink.reel_parts, ignore_index=True)
-    inv_df = pd.concat(sink.inv_parts, ignore_index=True)
+    reel_df = rows_frame(sink.reel_parts)
+    inv_df = rows_frame(sink.inv_parts)
     integrated_tables(reel_df, inv_df)
     result = DeploymentResult(sink.phases, reel_df, inv_df, changes, status, message, stopped)
     if status != 0 and raise_on_failure:

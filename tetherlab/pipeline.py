@@ -110,7 +110,8 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
     Prepared of the run's first phase (its reference orbit)}; the state is left to the caller."""
     from .resources import check_scene
 
-    check_scene(scene, outputs_in_memory=outputs_in_memory, out_dir=out_dir)
+    if reel_phase is None:  # a later phase's outputs are part of the run the first phase checked
+        check_scene(scene, outputs_in_memory=outputs_in_memory, out_dir=out_dir)
     # a scene continuing a finished run starts from its final state and time (continuation.py)
     start = None
     if scene.continue_from is not None:
@@ -181,7 +182,8 @@ def prepare(scene, *, outputs_in_memory: bool = True, out_dir=None, reel_phase: 
     # (tetherlab/initial/inextensible.py).
     eq_model = model
     inext = any(s.model == "inextensible" for s in specs)
-    if any(not spec.conservative for spec, _ in effects) or inext:
+    # (a later phase of a deployment takes its state from the last: no equilibrium to solve)
+    if reel_phase is None and (any(not spec.conservative for spec, _ in effects) or inext):
         eq_model = build_model(
             root_mass_kg=root.mass_kg,
             tethers=[inextensible.elastic_stand_in(s) for s in specs],

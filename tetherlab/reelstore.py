@@ -167,9 +167,11 @@ class DirPhases:
         return res, p
 
     def end_phase(self, loop: dict, prep, res, stats: dict, message: str, p, d, reel_parts, inv) -> None:
+        from .deployment import rows_frame
+
         ph = loop["phase"]
-        _write_frame(_part(self.out / "reel", ph), pd.concat(reel_parts, ignore_index=True))
-        _write_frame(_part(self.out / "invariants", ph), inv)
+        _write_frame(_part(self.out / "reel", ph), rows_frame(reel_parts))
+        _write_frame(_part(self.out / "invariants", ph), rows_frame([inv]))
         lay = prep.model.state
         rows = int(len(res.t))
         self.record["phases"] = self.record["phases"][:ph] + [{

@@ -220,6 +220,47 @@ class Result:
         return cls(ts, dg, run.get("stats", {}), status, run.get("message", ""), run.get("scene", {}), meta)
 
 
+class DeferredResult(Result):
+    """A :class:`Result` whose tables and meta are built from the run's arrays when first read.
+
+    A deployment keeps one Result per phase (tetherlab/deployment.py): building each one's ~300
+    columns as it ends cost more than the phase's integration at 500 m rods (docs/deployment.md
+    8d), and most uses read a few columns of a few phases.  ``build()`` returns the Result the
+    phase would have had (:meth:`Result.from_run` on the phase's arrays, kept by the closure);
+    it runs once, at the first read of ``timeseries``, ``diagnostics``, ``scene_dict`` or
+    ``meta``, and gives the same numbers as building it at once.  ``stats``, ``status`` and
+    ``message`` are known when the phase ends and are plain attributes."""
+
+    def __init__(self, build, stats: dict, status: int, message: str):
+        self._build = build
+        self._tables = None
+        self.stats = stats
+        self.status = int(status)
+        self.message = message
+
+    def _built(self) -> tuple:
+        if self._tables is None:
+            r = self._build()
+            self._tables = [r.timeseries, r.diagnostics, r.scene_dict, r.meta]
+            self._build = None  # the phase's arrays are released with the closure
+        return self._tables
+
+    def _field(i: int, name: str):  # noqa: N805 (a property factory, called in the class body)
+        def get(self):
+            return self._built()[i]
+
+        def put(self, value):
+            self._built()[i] = value
+
+        return property(get, put, doc=f"The phase's ``{name}``, built at its first read.")
+
+    timeseries = _field(0, "timeseries")
+    diagnostics = _field(1, "diagnostics")
+    scene_dict = _field(2, "scene_dict")
+    meta = _field(3, "meta")
+    del _field
+
+
 def _frame(cols: dict, nrows: int) -> pd.DataFrame:
     """The table of ``cols`` (name: column), as ``pd.DataFrame(cols)`` gives it.  Float columns
     are copied into one 2-D array first: pandas then builds one block instead of checking and

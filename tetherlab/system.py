@@ -8,6 +8,8 @@ per right-hand-side evaluation.
 
 from __future__ import annotations
 
+import functools
+
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -207,7 +209,14 @@ class Model:
 
 
 def gauss_legendre_halves(nq: int) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes xi and weights for the two half rods [-1, 0] and [0, 1]; each half's weights sum to 1."""
+    """Nodes xi and weights for the two half rods [-1, 0] and [0, 1]; each half's weights sum to 1.
+    (Copies of one computation per nq: a deployment builds a model at every birth.)"""
+    nodes, weights = _gauss_legendre_halves(int(nq))
+    return nodes.copy(), weights.copy()
+
+
+@functools.lru_cache(maxsize=None)
+def _gauss_legendre_halves(nq: int) -> tuple[np.ndarray, np.ndarray]:
     x, w = np.polynomial.legendre.leggauss(nq)
     right = 0.5 * (1.0 + x)
     wr = 0.5 * w
