@@ -93,6 +93,7 @@ from ..kernel.layout import (
     TT_ROD0,
     TT_SIZE,
 )
+from .reel_hub import drum_axle_force
 
 
 @njit(cache=True, inline="always")
@@ -164,7 +165,10 @@ def spool_forces(p, i, L, Ld, eps):
         jump = rho * Ld * Ld * eps
     else:
         ms = 0.0
-        jump = rho * Ld * Ld * (1.0 + eps)
+        # paying out, the line's tension jerks the material from rest to the line's speed; hauling
+        # in, the material is stopped by the stored heap it falls on, which can push it but not
+        # pull the line: the jump is the body's (reel_body_forces), not the line's (docs 9.8)
+        jump = rho * Ld * Ld * (1.0 + eps) if Ld > 0.0 else 0.0
     fr = p[rb + RL_CV] * Ld
     vs = p[rb + RL_VS]
     if p[rb + RL_FC] > 0.0:
@@ -259,9 +263,14 @@ def spool_indices(p):
 
 @njit(cache=True)
 def record_tensions(p, idx, out):
+    """The line's force in each spool reel's balance into out: the exit tension T (kept in the
+    scratch), less, for a drum on a rigid hub, the hub's angular acceleration along the axle,
+    (J/R + rho s R)(a.alpha) (docs/deployment.md 9.7).  Both are affine in the L'' of the
+    evaluation, so the solve of 10.2 stays exact with this in place of T."""
     for a in range(idx.shape[0]):
-        out[a] = exit_tension(p, idx[a])
-        p[int(p[H_OFF_RSCR]) + idx[a] * RS_SIZE + RS_TEX] = out[a]
+        T = exit_tension(p, idx[a])
+        p[int(p[H_OFF_RSCR]) + idx[a] * RS_SIZE + RS_TEX] = T
+        out[a] = T - drum_axle_force(p, idx[a])
 
 
 @njit(cache=True)
