@@ -87,5 +87,8 @@ def test_every_gate_has_a_probe_or_a_reason_to_have_none():
                 "deployment_limits_torque_unlimited_negative_control",
                 "deployment_limits_no_speed_brake_negative_control", "deployment_limits_one_sided_negative_control",
                 # and the retrieval against the reeled pendulum (part N)
-                "deployment_retrieval_pendulum_over_budget", "deployment_retrieval_pendulum_frozen_negative_control"}
+                "deployment_retrieval_pendulum_over_budget", "deployment_retrieval_pendulum_frozen_negative_control",
+                # and the drum under a spool law on the hub (part R)
+                "deployment_hub_drum_angular_momentum_over_bound", "deployment_hub_drum_energy_over_bound",
+                "deployment_hub_drum_negative_control"}
     assert not (gates - probed - set(verify.TOOTHLESS) - credited), "gates neither probed nor explained"
