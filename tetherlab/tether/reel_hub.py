@@ -12,7 +12,8 @@ the balances of S with the flux m' = rho L' through e give (docs/deployment.md 9
                               + m' R_s^2 (omega + a (a.omega))/2
 
 where h_d = m_s R_s L' a is the spin of a drum's stored turns relative to the body (0 for a
-canister) and the last term is the ring's angular momentum, left behind in the body by the
+canister), plus under a spool law the drum's own J (L'/R) a (docs/deployment.md 9.7;
+:func:`drum_axle_force` is the hub's alpha in the spool's balance) and the last term is the ring's angular momentum, left behind in the body by the
 material that goes from the rim to the exit at the centre.  :func:`reel_hub_terms` adds every term
 that the hub's set-up (bodies/rigid_body.py: diag(m I, R J_s R^T), the dry body's F6) and the point
 body's flux (tether/reel.py: -m' w) do not have; the reaction solve brings the line's force and

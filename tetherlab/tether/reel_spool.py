@@ -7,9 +7,12 @@ at the rim (docs/deployment.md 10.1):
     m_s L'' = T - j - F_b,
 
 * T = -J_0.u the line's tension at the exit (the reaction solve's);
-* j the momentum the exit gives the material: rho L'^2 eps on a drum (the turns are unstretched
-  at rim speed L', the line leaves at L'(1 + eps)), rho L'^2 (1 + eps) through a canister
-  (the material leaves from rest);
+* j the momentum the exit gives the material through the line: rho L'^2 eps on a drum (the turns
+  are unstretched at rim speed L', the line leaves at L'(1 + eps)), rho L'^2 (1 + eps) paying out
+  through a canister (the material leaves from rest) and 0 hauling in through one (the heap it
+  falls on stops it; docs/deployment.md 9.8);
+* on a drum on a rigid hub, T is replaced by T - (J/R + rho s R)(a.alpha), the hub's angular
+  acceleration along the axle (docs/deployment.md 9.7), affine in L'' like T;
 * m_s = J/R^2 + rho (stored length) on a drum (the spool and the turns still on it), 0 on a
   canister (no spool: the brake holds the line where it leaves);
 * F_b = tau/R + c L' + F_c tanh(L'/v_s) + F_v the force of the brake or motor, the friction and
