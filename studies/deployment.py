@@ -84,6 +84,11 @@ P. Hub-and-spoke from a 500 kg hub spinning at 1 rpm under spool laws (studies/d
    the spin rate against the rigid-body estimate H_z / I_z(L) in a figure.
 Q. One spoke lagging (its brake 3x): the nutation and the hub's drift, with and without the PD
    controller; measured, not gated.
+R. Part H's hub paying out from a drum under the spool law (J 0.5 kg m^2 on 0.3 m), a brake and a
+   motor (studies/deployment_hub.py part_hub_drum, docs/deployment.md 9.7): the total angular
+   momentum with the drum's own spin within 100 rtol |H(0)|, (10.3) with the drum's kinetic energy
+   within its quadrature's estimate. Control: the old model, the drum's spin left out of the hub's
+   balance and the hub's alpha out of the spool's (DEFECT_HUB_DRUM_NO_SPIN).
 
     PYTHONPATH=. python studies/deployment.py OUTDIR [--quiet]
 """
@@ -108,7 +113,7 @@ from tetherlab.model.params import DEFECT_REEL_FROZEN, DEFECT_REEL_NO_LDOT, DEFE
 from tetherlab.pipeline import prepare  # noqa: E402
 from tetherlab.scene import Scene  # noqa: E402
 
-from studies.deployment_hub import hub_figure, part_hub  # noqa: E402
+from studies.deployment_hub import hub_figure, part_hub, part_hub_drum  # noqa: E402
 from studies.deployment_spoke import part_lag, part_spokes, spoke_figure  # noqa: E402
 
 EPS = float(np.finfo(float).eps)
@@ -1106,7 +1111,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("outdir", type=Path)
     ap.add_argument("--quiet", action="store_true")
-    ap.add_argument("--parts", default="ABCDEFGHIJKLMNPQ", help="parts to run (A and C run together)")
+    ap.add_argument("--parts", default="ABCDEFGHIJKLMNPQR", help="parts to run (A and C run together)")
     args = ap.parse_args(argv)
     out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
@@ -1134,7 +1139,8 @@ def main(argv=None) -> int:
     for name, part in (("B", lambda: (*part_birth(), None)), ("D", part_retire), ("E", part_exponential),
                        ("F", part_retrieval), ("G", part_convergence), ("H", part_hub), ("I", part_spool),
                        ("J", part_seds), ("K", part_yes2), ("L", part_retrieval_law), ("M", part_limits),
-                       ("N", part_retrieval_pendulum), ("P", part_spokes), ("Q", part_lag)):  # fmt: skip
+                       ("N", part_retrieval_pendulum), ("P", part_spokes), ("Q", part_lag),
+                       ("R", part_hub_drum)):  # fmt: skip
         if name in args.parts:
             run_part(name, part)
     free = found.get("A+C")

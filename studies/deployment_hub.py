@@ -276,3 +276,59 @@ def hub_figure(out, hub, plt) -> list[str]:
     fig.savefig(out / name, dpi=110)
     plt.close(fig)
     return [name]
+
+
+# -- part R: a drum under a spool law on the hub (docs/deployment.md 9.7) -----------------------
+DRUM_J, DRUM_TORQUES = 0.5, (("brake", "0.01 N m"), ("motor", "-0.3 N m"))  # kg m^2 on SPOOL_R; N m
+
+
+def drum_scene(torque, *, duration="60 s", count=121):
+    """The hub of hub_scene paying out from a drum of J = 0.5 kg m^2 on R = 0.3 m (axis z, the turns'
+    ring on the rim) under the spool law from 2 m/s, against a constant torque (0.01 N m: a brake;
+    -0.3 N m: a motor paying out) and a viscous friction of 0.5 N s/m."""
+    data = hub_scene(duration=duration, count=count).to_dict()
+    data["tethers"]["main"]["reel"].update({
+        "law": "spool", "exit": "drum", "speed": "2 m/s", "drum_radius": f"{SPOOL_R} m", "spool_axis": [0, 0, 1],
+        "spool_inertia": f"{DRUM_J} kg m2", "torque": torque, "viscous_friction": "0.5 N s/m"})  # fmt: skip
+    return Scene.from_dict(data)
+
+
+def drum_ratios(run):
+    """(|H - H(0)| max / (100 rtol |H(0)|), (10.3)'s drift / (2 Richardson est + 100 rtol max |E|)),
+    the bounds of part H and of the spool's energy gate (studies/reel_laws.py spool_energy)."""
+    from studies.reel_laws import spool_energy
+
+    H = _vec(run.invariants, "H")
+    h = float(np.abs(H - H[0]).max()) / (100.0 * HUB_RTOL * float(np.linalg.norm(H[0])))
+    total, est = spool_energy(run)
+    scale = float(np.abs(run.invariants["energy_J"]).max())
+    e = float(np.abs(total - total[0]).max()) / (2.0 * est + 100.0 * HUB_RTOL * scale)
+    return h, e
+
+
+def part_hub_drum():
+    """R: the drum under a brake and under a motor: H (the drum's own spin included) and (10.3)
+    within their bounds; control: the old model (DEFECT_HUB_DRUM_NO_SPIN) on the brake run."""
+    from tetherlab import mutants
+
+    rows, h_worst, e_worst = [], 0.0, 0.0
+    for label, torque in DRUM_TORQUES:
+        run = simulate_reel(drum_scene(torque), progress=False)
+        if not run.ok:
+            raise RuntimeError(f"part R ({label}): {run.message}")
+        h, e = drum_ratios(run)
+        h_worst, e_worst = max(h_worst, h), max(e_worst, e)
+        r = run.reel
+        rows.append({"case": f"R drum on the hub, {label} {torque}: |H - H(0)| / bound, (10.3) drift / bound",
+                     "value": h, "unit": "1", "note": f"energy {e:.3g}; L' 2 -> {float(r['speed_m_s'].iloc[-1]):.3g} m/s, "
+                     f"brake work {float(r['brake_work_J'].iloc[-1]):.4g} J, {len(run.changes)} births"})  # fmt: skip
+    with mutants.active("hub_drum_no_spin"):
+        ctrl = simulate_reel(drum_scene(DRUM_TORQUES[0][1]), progress=False)
+    # the control's weakest failure over the two gates (bound / measured: below 1 when it failed both)
+    control = max(1.0 / r for r in drum_ratios(ctrl)) if ctrl.ok else math.inf
+    rows.append({"case": "R control: the old model (the drum's spin out of both balances), bound / measured",
+                 "value": control, "unit": "1"})
+    gates = {"deployment_hub_drum_angular_momentum_over_bound": h_worst,
+             "deployment_hub_drum_energy_over_bound": e_worst,
+             "deployment_hub_drum_negative_control": control}
+    return rows, gates, None

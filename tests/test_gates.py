@@ -94,5 +94,8 @@ def test_every_gate_has_a_probe_or_a_reason_to_have_none():
                 "deployment_retrieval_settle_over_budget", "deployment_retrieval_settle_3l_negative_control",
                 # and the SEDS-like run against the reduced model and its energy (part J)
                 "deployment_seds_reduced_over_budget", "deployment_seds_energy_over_bound",
-                "deployment_seds_canister_negative_control"}
+                "deployment_seds_canister_negative_control",
+                # and the drum under a spool law on the hub (part R)
+                "deployment_hub_drum_angular_momentum_over_bound", "deployment_hub_drum_energy_over_bound",
+                "deployment_hub_drum_negative_control"}
     assert not (gates - probed - set(verify.TOOTHLESS) - credited), "gates neither probed nor explained"

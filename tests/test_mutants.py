@@ -104,7 +104,8 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
              ("deployment_spoke_one_stored_negative_control", "reel_one_stored", "deployment_spoke_momentum_over_bound"),
              ("deployment_yes2_hold_3l_negative_control", "tension_3l", "deployment_yes2_hold_over_budget"),
              ("deployment_retrieval_settle_3l_negative_control", "tension_3l", "deployment_retrieval_settle_over_budget"),
-             ("deployment_seds_canister_negative_control", "canister_as_drum", "deployment_seds_reduced_over_budget"))
+             ("deployment_seds_canister_negative_control", "canister_as_drum", "deployment_seds_reduced_over_budget"),
+             ("deployment_hub_drum_negative_control", "hub_drum_no_spin", "deployment_hub_drum_angular_momentum_over_bound"))
     for ctrl_gate, defect, gate in pairs:
         assert ParamView(_reel_params(defect)).defect == getattr(L, "DEFECT_" + {
             "reel_rescaled": "REEL_RESCALED", "reel_strain_rate_without_ldot": "REEL_NO_LDOT",
@@ -112,7 +113,8 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
             "reel_hub_ring_dropped": "REEL_NO_RING", "spool_torque_unlimited": "SPOOL_TORQUE_UNLIMITED",
             "spool_no_speed_brake": "SPOOL_NO_SPEED_BRAKE", "spool_torque_one_sided": "SPOOL_TORQUE_ONE_SIDED",
             "reel_hub_ring_full": "REEL_RING_FULL", "wheels_gyro_dropped": "WHEELS_NO_GYRO",
-            "reel_one_stored": "REEL_ONE_STORED", "tension_3l": "TENSION_3L", "canister_as_drum": "CANISTER_AS_DRUM"}[defect])
+            "reel_one_stored": "REEL_ONE_STORED", "tension_3l": "TENSION_3L", "canister_as_drum": "CANISTER_AS_DRUM",
+            "hub_drum_no_spin": "HUB_DRUM_NO_SPIN"}[defect])
         thr = GATES[ctrl_gate]["threshold"]
         for ctrl, expect in ((0.5 * thr, True), (2.0 * thr, False), (None, False)):
             by_defect, _by_gate, _ = verify.mutation_summary({}, GATES, {ctrl_gate: ctrl})

@@ -498,6 +498,20 @@ MUTANTS = {
             mutate=_flag(L.DEFECT_CANISTER_AS_DRUM),
             path="reel",
         ),
+        # -- a drum under a spool law on a rigid hub (docs/deployment.md 9.7): run by studies/deployment.py
+        # part R beside the hub's drum and credited from its control gate.
+        Mutant(
+            "hub_drum_no_spin",
+            "a drum under a spool law on a rigid hub without its own spin J (L'/R) a in the hub's balance and "
+            "without the hub's angular acceleration along the axle in the spool's balance (the model before 9.7)",
+            "tether/reel_hub.py reel_hub_terms, drum_axle_force (p[H_MUTANT] = DEFECT_HUB_DRUM_NO_SPIN)",
+            "docs/deployment.md 9.7 (the drum's spin in the total angular momentum; the spool's balance about "
+            "an axle turning with the hub)",
+            ("deployment_hub_drum_angular_momentum_over_bound", "deployment_hub_drum_energy_over_bound",
+             "deployment_hub_drum_negative_control"),
+            mutate=_flag(L.DEFECT_HUB_DRUM_NO_SPIN),
+            path="reel",
+        ),
     )
 }
 

@@ -47,6 +47,7 @@ DEFECT_WHEELS_NO_GYRO = 42        # a rigid body's gyroscopic torque without its
 DEFECT_REEL_RING_FULL = 43        # a reel on a rigid body whose stored ring keeps the full line's inertia as it pays out (tether/reel_hub.py)
 DEFECT_REEL_ONE_STORED = 44       # a body with several reels whose mass counts only the last reel's stored tether (tether/reel.py)
 DEFECT_CANISTER_AS_DRUM = 52      # a canister's exit jump taken as a drum's, rho L'^2 eps in place of rho L'^2 (1 + eps) (tether/reel_spool.py)
+DEFECT_HUB_DRUM_NO_SPIN = 50      # a drum under a spool law on a rigid hub without its own spin J L'/R in the hub's balance nor the hub's alpha in the spool's (tether/reel_hub.py, tether/reel_spool.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 

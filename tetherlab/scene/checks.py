@@ -235,13 +235,12 @@ def _check_reel_hub(t: Tether, body, path: str) -> None:
                     "spool_radius": "the radius of the spool the stored tether is wound on (e.g. '0.3 m')",
                     "spool_axis": "the drum's axis, body axes, perpendicular to exit_direction"}[key]  # fmt: skip
             raise SceneError(f"{path}.{key}", f"{what} for a reel on the rigid body {body.name!r}", _NOTHING)
-    if r.exit == "drum" and r.spool is not None:
-        # the hub's balance (docs/deployment.md 9.2) carries the turns' spin but not the drum's own,
-        # J omega_d about the axle, and the spool's (10.1) omits the hub's angular acceleration
-        # along the axle: together they would conserve the wrong angular momentum (section 9.6)
-        raise SceneError(f"{path}.exit", f"'canister' for law {r.law!r} on the rigid body {body.name!r} (a drum "
-                         "spool law on a rigid body is not modelled: docs/deployment.md 9.6), or a prescribed law "
-                         "with the drum", "'drum'")  # fmt: skip
+    if r.exit == "drum" and r.spool is not None and not math.isclose(r.spool_radius_m, r.spool.drum_radius_m, rel_tol=1e-12):
+        # under a spool law the drum turns at L'/R (R the torque's arm) and its turns, the ring of
+        # radius R_s, move at the rim speed L' only if R_s = R (docs/deployment.md 9.7)
+        raise SceneError(f"{path}.spool_radius", f"the drum_radius ({r.spool.drum_radius_m:.6g} m) for a drum under "
+                         f"law {r.law!r} on the rigid body {body.name!r} (its turns are wound at the rim)",
+                         f"{r.spool_radius_m:.6g} m")  # fmt: skip
     J = np.array(body.rigid.inertia_kg_m2, float)
     size = math.sqrt(float(np.trace(J)) / body.mass_kg)
     limit = REEL_SIZE_FACTOR * size

@@ -158,9 +158,10 @@ def reel_rows(ts, Y, p, out, acc, datt):
                 wx * wx + wy * wy + wz * wz
             ) / 6.0
             o[16] = p[sb + SR_FE]
+            ring = 0.0
             if p[int(p[H_OFF_BODY]) + int(p[rb + RL_BODY]) * BT_SIZE + BT_RIGID] != 0.0:
                 # the stored tether on a rigid body: off its centre of mass, with its inertia
-                s0, s1, s2, s3, s4, s5, s6, s7 = reel_hub_share(p, i)
+                s0, s1, s2, s3, s4, s5, s6, s7, ring = reel_hub_share(p, i)
                 o[7] -= s7
                 o[9] += s0
                 o[10] += s1
@@ -179,9 +180,16 @@ def reel_rows(ts, Y, p, out, acc, datt):
                 o[21] = 0.5 * ms * ld * ld
                 # the exit's own loss, from the jumps of strain and speed there (10.3)
                 if int(p[rb + RL_EXIT]) == REEL_EXIT_CANISTER:
-                    o[22] = ld * eps * (tens - 0.5 * ea * eps) + 0.5 * rho * ld * ld * ld * (1.0 - eps * eps)
+                    if ld > 0.0:
+                        o[22] = ld * eps * (tens - 0.5 * ea * eps) + 0.5 * rho * ld * ld * ld * (1.0 - eps * eps)
+                    else:  # hauling in: the jump is stopped by the heap, the line feels none (docs 9.8)
+                        o[22] = ld * eps * (tens - 0.5 * ea * eps) - 0.5 * rho * ld * ld * ld * (1.0 + eps) * (1.0 + eps)
                 else:
                     o[22] = ld * eps * (tens - 0.5 * ea * eps) - 0.5 * rho * ld * ld * ld * eps * eps
+                if ring != 0.0:
+                    # on a rigid body the work of carrying the material from the ring to the exit
+                    # is not in (10.3)'s P_loss: it goes into E (docs/deployment.md 9.5, 9.7)
+                    o[22] -= ring
                 o[23] = p[rs + RS_TCMD]
                 # the limits (10.4): the motor's torque before its limit, the regulating brake, and
                 # which limit the law is beyond (1: the torque's, 2: the speed's, 3: both)

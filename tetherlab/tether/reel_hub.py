@@ -12,7 +12,8 @@ the balances of S with the flux m' = rho L' through e give (docs/deployment.md 9
                               + m' R_s^2 (omega + a (a.omega))/2
 
 where h_d = m_s R_s L' a is the spin of a drum's stored turns relative to the body (0 for a
-canister) and the last term is the ring's angular momentum, left behind in the body by the
+canister), plus under a spool law the drum's own J (L'/R) a (docs/deployment.md 9.7;
+:func:`drum_axle_force` is the hub's alpha in the spool's balance) and the last term is the ring's angular momentum, left behind in the body by the
 material that goes from the rim to the exit at the centre.  :func:`reel_hub_terms` adds every term
 that the hub's set-up (bodies/rigid_body.py: diag(m I, R J_s R^T), the dry body's F6) and the point
 body's flux (tether/reel.py: -m' w) do not have; the reaction solve brings the line's force and
@@ -33,11 +34,15 @@ from ..kernel.layout import (
     BS_SIZE,
     BS_V,
     BS_W,
+    BT_RIGID,
+    BT_SIZE,
+    DEFECT_HUB_DRUM_NO_SPIN,
     DEFECT_REEL_NO_EXIT_TORQUE,
     DEFECT_REEL_NO_RING,
     DEFECT_REEL_RING_FULL,
     H_MUTANT,
     H_NBODY,
+    H_OFF_BODY,
     H_OFF_BSCR,
     H_OFF_REEL,
     H_OFF_RSCR,
@@ -46,8 +51,11 @@ from ..kernel.layout import (
     RL_BODY,
     RL_EXIT,
     RL_LINE,
+    RL_MEFF,
+    RL_R,
     RL_RHO,
     RL_SIZE,
+    RL_SOFF,
     RL_SPR,
     RL_TETH,
     RS_L,
@@ -62,9 +70,11 @@ from ..kernel.vec3 import cross, mat_vec
 
 
 @njit(cache=True, inline="always")
-def _stored(p, i):
+def _stored(p, i, spin):
     """(m_s, m', e (inertial), a (inertial), R_s, h_d (inertial), h_d' (inertial)) of reel i on its
-    rigid body, its attitude and its tether's attachment already in the scratch."""
+    rigid body, its attitude and its tether's attachment already in the scratch.  On a drum under a
+    spool law h_d also carries the drum's own spin J (L'/R) a relative to the hub (``spin``; docs
+    9.7), J/R = RL_MEFF R (RL_MEFF = J/R^2, 0 for a prescribed drum and a canister)."""
     rb = int(p[H_OFF_REEL]) + i * RL_SIZE
     rs = int(p[H_OFF_RSCR]) + i * RS_SIZE
     b = int(p[rb + RL_BODY])
@@ -86,6 +96,12 @@ def _stored(p, i):
         # m_s R_s^2 (L'/R_s) about a, and its rate with m_s' = -rho L'
         hd = ms * rsp * Ld
         hdd = rsp * rho * (stored * Ldd - Ld * Ld)
+        jr = p[rb + RL_MEFF] * p[rb + RL_R]
+        if spin and jr > 0.0:
+            # the drum itself turns at L'/R relative to the hub (its inertia J about the axle with
+            # the hub's rotation is in the hub's J_s): J (L'/R) a, and its rate J (L''/R) a
+            hd += jr * Ld
+            hdd += jr * Ldd
     return (ms, md, p[ts + TS_RHO], p[ts + TS_RHO + 1], p[ts + TS_RHO + 2], ax, ay, az, rsp,
             hd * ax, hd * ay, hd * az, hdd * ax, hdd * ay, hdd * az)  # fmt: skip
 
@@ -109,7 +125,8 @@ def reel_hub_terms(p, i, jump, ux, uy, uz):
     rb = int(p[H_OFF_REEL]) + i * RL_SIZE
     b = int(p[rb + RL_BODY])
     bs = int(p[H_OFF_BSCR]) + b * BS_SIZE
-    ms, md, ex, ey, ez, ax, ay, az, rsp, hx, hy, hz, hdx, hdy, hdz = _stored(p, i)
+    spin = int(p[H_MUTANT]) != DEFECT_HUB_DRUM_NO_SPIN  # the negative control: the old model, no drum spin
+    ms, md, ex, ey, ez, ax, ay, az, rsp, hx, hy, hz, hdx, hdy, hdz = _stored(p, i, spin)
     ts = int(p[H_OFF_BSCR]) + int(p[H_NBODY]) * BS_SIZE + int(p[rb + RL_TETH]) * TS_SIZE
     wx = p[bs + BS_W]
     wy = p[bs + BS_W + 1]
@@ -174,14 +191,17 @@ def reel_hub_share(p, i):
     """What reel i's stored tether adds to its rigid body's share (which counts m v_O and the dry
     J_s omega): momentum omega x m_s e; angular momentum about the origin r_O x (omega x m_s e) +
     m_s e x v_O + J_st omega + h_d; kinetic energy m_s v_O.(omega x e) + omega.J_st omega/2 and,
-    for a drum, omega.h_d + m_s L'^2/2; and the power the reel puts into the system besides the exit's
-(docs/deployment.md 9.3): carrying the material from the ring to the exit at its centre,
-m' omega.K_ring omega/2, and for a drum its motor's work on the turns, alpha.h_d - rho L'^3/2 +
-m_s L' L'' (the body's accelerations already solved).  Returns the 8 numbers."""
+    for a drum, omega.h_d (+ m_s L'^2/2 under a prescribed law; under a spool law the relative
+    kinetic energy of the drum and its turns is the spool's own K_s, docs/deployment.md 10.3, 9.7);
+    the power the reel puts into the system besides the exit's (docs/deployment.md 9.3, 9.7):
+    carrying the material from the ring to the exit at its centre, m' omega.K_ring omega/2, and for
+    a drum alpha.h_d, with, under a prescribed law, its motor's work on the turns -rho L'^3/2 +
+    m_s L' L'' (the body's accelerations already solved); and that ring term alone.  Returns the 9
+    numbers."""
     rb = int(p[H_OFF_REEL]) + i * RL_SIZE
     rs = int(p[H_OFF_RSCR]) + i * RS_SIZE
     bs = int(p[H_OFF_BSCR]) + int(p[rb + RL_BODY]) * BS_SIZE
-    ms, md, ex, ey, ez, ax, ay, az, rsp, hx, hy, hz, hdx, hdy, hdz = _stored(p, i)
+    ms, md, ex, ey, ez, ax, ay, az, rsp, hx, hy, hz, hdx, hdy, hdz = _stored(p, i, True)
     wx = p[bs + BS_W]
     wy = p[bs + BS_W + 1]
     wz = p[bs + BS_W + 2]
@@ -196,18 +216,49 @@ m_s L' L'' (the body's accelerations already solved).  Returns the 8 numbers."""
     bx, by, bz = cross(ms * ex, ms * ey, ms * ez, vx, vy, vz)
     jx, jy, jz = _stored_inertia_times(ms, ex, ey, ez, ax, ay, az, rsp, wx, wy, wz)
     ke = vx * px + vy * py + vz * pz + 0.5 * (wx * jx + wy * jy + wz * jz)
-    if int(p[rb + RL_EXIT]) == REEL_EXIT_DRUM:
+    drum = int(p[rb + RL_EXIT]) == REEL_EXIT_DRUM
+    spool = p[rb + RL_SOFF] >= 0.0
+    if drum:
         ld = p[rs + RS_LD]
-        ke += wx * hx + wy * hy + wz * hz + 0.5 * ms * ld * ld
+        if spool:
+            ke += wx * hx + wy * hy + wz * hz
+        else:
+            ke += wx * hx + wy * hy + wz * hz + 0.5 * ms * ld * ld
     # the work the reel does carrying the material from the ring to the exit at its centre (the
     # ring term of the torque, m' omega.K_ring omega, less the ring's kinetic energy it leaves with)
     aw = ax * wx + ay * wy + az * wz
     ring = 0.25 * md * rsp * rsp * (wx * wx + wy * wy + wz * wz + aw * aw)
-    if int(p[rb + RL_EXIT]) == REEL_EXIT_DRUM:
-        # and the work of the drum's motor or brake on the turns it spins: d/dt(omega.h_d + m_s L'^2/2)
-        # less the work its reaction does on the hub, -omega.h_d' (docs/deployment.md 9.3)
+    work = ring
+    if drum:
         ld = p[rs + RS_LD]
         rho = p[rb + RL_RHO]
         A = bs + BS_A
-        ring += p[A + 3] * hx + p[A + 4] * hy + p[A + 5] * hz - 0.5 * rho * ld * ld * ld + ms * ld * p[rs + RS_LDD]
-    return px, py, pz, ax_ + bx + jx + hx, ay_ + by + jy + hy, az_ + bz + jz + hz, ke, ring
+        if spool:
+            # the motor is inside the system: what is left besides the spool's balance is the
+            # hub's angular acceleration against the drum's and turns' relative spin (docs 9.7)
+            work += p[A + 3] * hx + p[A + 4] * hy + p[A + 5] * hz
+        else:
+            # the work of the drum's motor or brake on the turns it spins: d/dt(omega.h_d + m_s L'^2/2)
+            # less the work its reaction does on the hub, -omega.h_d' (docs/deployment.md 9.3)
+            work += p[A + 3] * hx + p[A + 4] * hy + p[A + 5] * hz - 0.5 * rho * ld * ld * ld + ms * ld * p[rs + RS_LDD]
+    return px, py, pz, ax_ + bx + jx + hx, ay_ + by + jy + hy, az_ + bz + jz + hz, ke, work, ring
+
+
+@njit(cache=True)
+def drum_axle_force(p, i):
+    """The hub's angular acceleration along the axle in the spool's balance of reel i, a drum under
+    a spool law on a rigid body, in force units at the rim: (J/R + rho s R)(a.alpha) (docs/deployment.md
+    9.7: about an axle turning with the hub, the drum and its turns turn at a.omega + L'/R).  0 on
+    a point body, a canister or a prescribed law, and under the old model's negative control."""
+    rb = int(p[H_OFF_REEL]) + i * RL_SIZE
+    if int(p[rb + RL_EXIT]) != REEL_EXIT_DRUM or int(p[H_MUTANT]) == DEFECT_HUB_DRUM_NO_SPIN:
+        return 0.0
+    b = int(p[rb + RL_BODY])
+    if p[int(p[H_OFF_BODY]) + b * BT_SIZE + BT_RIGID] == 0.0:
+        return 0.0
+    bs = int(p[H_OFF_BSCR]) + b * BS_SIZE
+    ax, ay, az = mat_vec(p, bs + BS_ROT, p[rb + RL_AX], p[rb + RL_AX + 1], p[rb + RL_AX + 2])
+    A = bs + BS_A
+    stored = p[rb + RL_LINE] - p[int(p[H_OFF_RSCR]) + i * RS_SIZE + RS_L]
+    mu = (p[rb + RL_MEFF] + p[rb + RL_RHO] * stored) * p[rb + RL_R]
+    return mu * (ax * p[A + 3] + ay * p[A + 4] + az * p[A + 5])

@@ -7,9 +7,12 @@ at the rim (docs/deployment.md 10.1):
     m_s L'' = T - j - F_b,
 
 * T = -J_0.u the line's tension at the exit (the reaction solve's);
-* j the momentum the exit gives the material: rho L'^2 eps on a drum (the turns are unstretched
-  at rim speed L', the line leaves at L'(1 + eps)), rho L'^2 (1 + eps) through a canister
-  (the material leaves from rest);
+* j the momentum the exit gives the material through the line: rho L'^2 eps on a drum (the turns
+  are unstretched at rim speed L', the line leaves at L'(1 + eps)), rho L'^2 (1 + eps) paying out
+  through a canister (the material leaves from rest) and 0 hauling in through one (the heap it
+  falls on stops it; docs/deployment.md 9.8);
+* on a drum on a rigid hub, T is replaced by T - (J/R + rho s R)(a.alpha), the hub's angular
+  acceleration along the axle (docs/deployment.md 9.7), affine in L'' like T;
 * m_s = J/R^2 + rho (stored length) on a drum (the spool and the turns still on it), 0 on a
   canister (no spool: the brake holds the line where it leaves);
 * F_b = tau/R + c L' + F_c tanh(L'/v_s) + F_v the force of the brake or motor, the friction and
@@ -95,6 +98,7 @@ from ..kernel.layout import (
     TT_ROD0,
     TT_SIZE,
 )
+from .reel_hub import drum_axle_force
 
 
 @njit(cache=True, inline="always")
@@ -167,7 +171,10 @@ def spool_forces(p, i, L, Ld, eps):
         jump = rho * Ld * Ld * eps
     else:
         ms = 0.0
-        jump = rho * Ld * Ld * (1.0 + eps)
+        # paying out, the line's tension jerks the material from rest to the line's speed; hauling
+        # in, the material is stopped by the stored heap it falls on, which can push it but not
+        # pull the line: the jump is the body's (reel_body_forces), not the line's (docs 9.8)
+        jump = rho * Ld * Ld * (1.0 + eps) if Ld > 0.0 else 0.0
         if int(p[H_MUTANT]) == DEFECT_CANISTER_AS_DRUM:  # negative control of the SEDS-like comparison
             jump = rho * Ld * Ld * eps
     fr = p[rb + RL_CV] * Ld
@@ -264,9 +271,14 @@ def spool_indices(p):
 
 @njit(cache=True)
 def record_tensions(p, idx, out):
+    """The line's force in each spool reel's balance into out: the exit tension T (kept in the
+    scratch), less, for a drum on a rigid hub, the hub's angular acceleration along the axle,
+    (J/R + rho s R)(a.alpha) (docs/deployment.md 9.7).  Both are affine in the L'' of the
+    evaluation, so the solve of 10.2 stays exact with this in place of T."""
     for a in range(idx.shape[0]):
-        out[a] = exit_tension(p, idx[a])
-        p[int(p[H_OFF_RSCR]) + idx[a] * RS_SIZE + RS_TEX] = out[a]
+        T = exit_tension(p, idx[a])
+        p[int(p[H_OFF_RSCR]) + idx[a] * RS_SIZE + RS_TEX] = T
+        out[a] = T - drum_axle_force(p, idx[a])
 
 
 @njit(cache=True)

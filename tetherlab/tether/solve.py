@@ -142,8 +142,9 @@ def system_accelerations(t, q, qd, att, p, acc, datt):
     (details in p's header).
 
     A reel whose length is state (a spool law) needs its L'' from the spool's balance, which
-    holds the exit tension, itself affine in L'': solved exactly by evaluating the system at
-    L'' = 0 and at one unit per spool reel, then once more at the solution (tether/reel_spool.py).
+    holds the exit tension (and, for a drum on a rigid hub, the hub's angular acceleration along
+    the axle: docs/deployment.md 9.7), both affine in L'': solved exactly by evaluating the system
+    at L'' = 0 and at one unit per spool reel, then once more at the solution (tether/reel_spool.py).
     """
     reels = int(p[H_NREEL]) > 0
     if not reels:

@@ -265,6 +265,8 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         ("deployment_spoke_wheels_negative_control", "wheels_gyro_dropped",
          ("deployment_spoke_angular_momentum_over_bound",)),
         ("deployment_spoke_one_stored_negative_control", "reel_one_stored", ("deployment_spoke_momentum_over_bound",)),
+        ("deployment_hub_drum_negative_control", "hub_drum_no_spin",
+         ("deployment_hub_drum_angular_momentum_over_bound", "deployment_hub_drum_energy_over_bound")),
         ("deployment_spool_uncoupled_negative_control", "spool_uncoupled",
          ("deployment_spool_drum_over_budget", "deployment_spool_energy_over_bound")),
         ("deployment_tension_k2_negative_control", "tension_k2_flipped", ("deployment_tension_roots_over_budget",)),

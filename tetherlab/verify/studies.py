@@ -189,6 +189,10 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_spoke_wheels_negative_control": g.get("deployment_spoke_wheels_negative_control"),
         "deployment_spoke_momentum_over_bound": g.get("deployment_spoke_momentum_over_bound"),
         "deployment_spoke_one_stored_negative_control": g.get("deployment_spoke_one_stored_negative_control"),
+        # part R: a drum under a spool law on the hub (studies/deployment_hub.py, docs/deployment.md 9.7)
+        "deployment_hub_drum_angular_momentum_over_bound": g.get("deployment_hub_drum_angular_momentum_over_bound"),
+        "deployment_hub_drum_energy_over_bound": g.get("deployment_hub_drum_energy_over_bound"),
+        "deployment_hub_drum_negative_control": g.get("deployment_hub_drum_negative_control"),
         "deployment_spool_drum_over_budget": g.get("deployment_spool_drum_over_budget"),
         "deployment_spool_energy_over_bound": g.get("deployment_spool_energy_over_bound"),
         "deployment_tension_roots_over_budget": g.get("deployment_tension_roots_over_budget"),
