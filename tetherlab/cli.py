@@ -264,9 +264,10 @@ def _validate(args) -> int:
     return 0
 
 
-def _longest_deployed_m(tether, duration_s: float | None) -> float:
-    """The most line a reel tether has out over the run: the whole line under a spool law (its
-    length is state, known only by running), else the prescribed law's largest length."""
+def _longest_deployed_m(tether, duration_s: float | None, from_s: float = 0.0) -> float:
+    """The most line a reel tether has out from ``from_s`` to the end of the run: the whole line
+    under a spool law (its length is state, known only by running), else the prescribed law's
+    largest length."""
     from .scene.reels import length_at
 
     r = tether.reel
@@ -274,8 +275,9 @@ def _longest_deployed_m(tether, duration_s: float | None) -> float:
     if r.spool is not None or duration_s is None:
         return line
     # the laws are monotone except a table, whose spline is sampled (as deployment.check_law does)
-    ts = [duration_s * k / 200 for k in range(201)] if r.law == "table" else [0.0, duration_s]
-    return min(line, max(tether.length_m, *(length_at(r, tether.length_m, t) for t in ts)))
+    ts = ([from_s + (duration_s - from_s) * k / 200 for k in range(201)] if r.law == "table"
+          else [from_s, duration_s])  # fmt: skip
+    return min(line, max(length_at(r, tether.length_m, t) for t in ts))
 
 
 def reel_lines(scene, need) -> list[str]:
@@ -387,8 +389,9 @@ def probe_cost(scene, wall_budget_s: float) -> str:
             duration_s = scene.duration_seconds()
         except ValueError:
             duration_s = None
-        most = sum(max(t.rods, 1 + max(0, math.ceil((_longest_deployed_m(t, duration_s) - t.reel.birth_length_m)
-                                                   / t.reel.rod_length_m))) for t in scene.tethers if t.reel)
+        # (a reel's rods now are not known here: the count at the longest line from t1 on, at least one)
+        most = sum(1 + max(0, math.ceil((_longest_deployed_m(t, duration_s, t1) - t.reel.birth_length_m)
+                                        / t.reel.rod_length_m)) for t in scene.tethers if t.reel)
         most += sum(t.rods for t in scene.tethers if t.reel is None)
         now += sum(t.rods for t in scene.tethers if t.reel is None)
         text += (f"; within the probe {kinds.count('birth')} births and {kinds.count('retire')} retirements, "
