@@ -22,7 +22,9 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENES = sorted((ROOT / "studies" / "scenes").glob("*.toml"))
 
 #: per-scene duration override for the short stretch (the scene's own when shorter)
-SHORT_S = {"stiefel-scheifele": "20 d", "stiefel-example1": "20 d"}
+SHORT_S = {"stiefel-scheifele": "20 d", "stiefel-example1": "20 d",
+           # a reel law's stages must start within the run: the short stretch reaches the last one
+           "reel-yes2-like": "2.05 orbits", "reel-retrieval-tension": "3.8 orbits"}
 DEFAULT_S = 600.0
 
 
@@ -41,8 +43,15 @@ def _run(path: Path) -> dict[str, np.ndarray]:
         changes["duration"] = f"{DEFAULT_S} s"
     scene = scene.replace(**changes)
     res = tetherlab.simulate(scene, progress=False, raise_on_failure=False)
+    if hasattr(res, "phases"):  # a scene with reels: its phases' rows in order, and the reel table
+        import pandas as pd
+
+        frames = ((pd.concat([ph.timeseries for ph in res.phases], ignore_index=True), "ts"),
+                  (pd.concat([ph.diagnostics for ph in res.phases], ignore_index=True), "dg"), (res.reel, "reel"))
+    else:
+        frames = ((res.timeseries, "ts"), (res.diagnostics, "dg"))
     out = {}
-    for frame, tag in ((res.timeseries, "ts"), (res.diagnostics, "dg")):
+    for frame, tag in frames:
         for col in frame.columns:
             vals = np.asarray(frame[col])
             if vals.dtype.kind in "fiub":

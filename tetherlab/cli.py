@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import sys
 import time
 from pathlib import Path
@@ -248,6 +249,7 @@ def _validate(args) -> int:
             f"  cost per right-hand side grows linearly with the rods ({rods}); the number of steps is "
             f"known only by running: --probe SECONDS measures the rate on the start of the run",
         ]
+    lines += reel_lines(scene, need)
     from .regime import light_rods
 
     lines += [f"  warning: {w['text']}" for w in light_rods(scene)]
@@ -260,6 +262,58 @@ def _validate(args) -> int:
             _say(f"the probe run failed: {exc}")
             return 2
     return 0
+
+
+def _longest_deployed_m(tether, duration_s: float | None, from_s: float = 0.0) -> float:
+    """The most line a reel tether has out from ``from_s`` to the end of the run: the whole line
+    under a spool law (its length is state, known only by running), else the prescribed law's
+    largest length."""
+    from .scene.reels import length_at
+
+    r = tether.reel
+    line = tether.length_m + r.stored_length_m
+    if r.spool is not None or duration_s is None:
+        return line
+    # the laws are monotone except a table, whose spline is sampled (as deployment.check_law does)
+    ts = ([from_s + (duration_s - from_s) * k / 200 for k in range(201)] if r.law == "table"
+          else [from_s, duration_s])  # fmt: skip
+    return min(line, max(length_at(r, tether.length_m, t) for t in ts))
+
+
+def reel_lines(scene, need) -> list[str]:
+    """What ``validate`` says of a scene with reels: per reel its law and rods now and at most, and
+    the memory and disk of the largest layout (the rod count, so the state, changes at each birth;
+    the other lines of ``validate`` describe the first phase's)."""
+    reels = [t for t in scene.tethers if t.reel is not None]
+    if not reels:
+        return []
+    from .resources import GiB, estimate
+
+    try:
+        duration_s = scene.duration_seconds()
+    except ValueError:
+        duration_s = None
+    lines, changes = [], {}
+    for t in reels:
+        r = t.reel
+        most = _longest_deployed_m(t, duration_s)
+        rods_most = max(t.rods, 1 + max(0, math.ceil((most - r.birth_length_m) / r.rod_length_m)))
+        how = "by events of the run (a spool law)" if r.spool is not None else "at times the law gives"
+        lines.append(f"  reel {t.name}: law {r.law}, exit {r.exit}; {t.length_m:.6g} m out of a "
+                     f"{t.length_m + r.stored_length_m:.6g} m line, rods of {r.rod_length_m:.6g} m: {t.rods} rods "
+                     f"now, up to {rods_most} with {most:.6g} m out (births and retirements {how})")  # fmt: skip
+        if rods_most > t.rods:
+            changes[f"tethers.{t.name}.length"] = f"{most!r} m"
+    if need is not None and changes:
+        try:
+            big = estimate(scene.replace(**changes))
+        except Exception:  # noqa: BLE001 -- an estimate only: the scene itself was checked above
+            big = None
+        if big is not None:
+            lines.append(f"  with the most rods: state {big.state_len} floats; memory "
+                         f"{(big.rows * big.row_bytes_memory + big.fixed_bytes) / GiB:.3g} GiB, disk "
+                         f"{big.rows * big.row_bytes_disk / GiB:.3g} GiB at most (each phase adds a row at its start)")
+    return lines
 
 
 class _ProbeDone(Exception):
@@ -278,6 +332,14 @@ def probe_cost(scene, wall_budget_s: float) -> str:
     prep = prepare(scene)
     p = prep.model.fresh_params()
     t_end = float(prep.t_out[-1])
+    reel = any(t.reel is not None for t in scene.tethers)
+    sink = None
+    if reel:  # the tables each phase ends with compile at the first birth: before the clock starts
+        import numpy as np
+
+        from .deployment import _rows
+
+        _rows(prep.model, np.array([float(prep.t0_s)]), np.asarray(prep.y0, float)[None, :])
     seen: list[tuple[float, float]] = []
     start = [None]
 
@@ -291,7 +353,21 @@ def probe_cost(scene, wall_budget_s: float) -> str:
             raise _ProbeDone
 
     try:
-        integrate_prepared(prep, p, progress)
+        if reel:  # the phase loop itself: births and retirements (a model rebuilt, a remap) count in the rate
+            from .deployment import MemoryPhases, run_phases
+
+            class _Probe(MemoryPhases):  # keeps the loop's state: the rods and changes so far
+                loop = None
+
+                def start_phase(self, loop: dict) -> None:
+                    self.loop = loop
+
+            sink = _Probe(scene)
+            status, message, _, _ = run_phases(scene, sink, progress=progress)
+            if status != 0:
+                raise ValueError(message)
+        else:
+            integrate_prepared(prep, p, progress)
         finished = True
     except _ProbeDone:
         finished = False
@@ -301,9 +377,30 @@ def probe_cost(scene, wall_budget_s: float) -> str:
     rate = (t1 - t0) / (w1 - w0)
     left = (t_end - t1) / rate if rate > 0 else float("inf")
     total = (w1 - w0) + left
-    return (f"  probe: {_fmt_time(t1 - t0)} simulated in {w1 - w0:.1f} s of wall time ({rate:.4g} s simulated per "
+    text = (f"  probe: {_fmt_time(t1 - t0)} simulated in {w1 - w0:.1f} s of wall time ({rate:.4g} s simulated per "
             f"second); the whole run ({_fmt_time(t_end)}) would integrate in about {_fmt_time(total)} at this rate "
             f"(stiffness later in the run is not seen by the probe)")
+    if reel and sink.loop is not None:
+        # a step's cost grows with the rods (the right-hand side linearly): the rest of the run at the
+        # most rods it can reach bounds what the births still to come add (more steps are not seen)
+        kinds = [c["change"] for c in sink.loop["changes"]]
+        now = sum(sink.loop["rods"].values())
+        try:
+            duration_s = scene.duration_seconds()
+        except ValueError:
+            duration_s = None
+        # (a reel's rods now are not known here: the count at the longest line from t1 on, at least one)
+        most = sum(1 + max(0, math.ceil((_longest_deployed_m(t, duration_s, t1) - t.reel.birth_length_m)
+                                        / t.reel.rod_length_m)) for t in scene.tethers if t.reel)
+        most += sum(t.rods for t in scene.tethers if t.reel is None)
+        now += sum(t.rods for t in scene.tethers if t.reel is None)
+        text += (f"; within the probe {kinds.count('birth')} births and {kinds.count('retire')} retirements, "
+                 f"their cost counted, {now} rods at its end")
+        if most > now:
+            upper = (w1 - w0) + left * most / now
+            text += (f"; with up to {most} rods later, each step dearer in proportion: up to about "
+                     f"{_fmt_time(upper)}")
+    return text
 
 
 def _plot(args) -> int:

@@ -284,11 +284,41 @@ def _run(scene, out, record, loop, restart, progress, checkpoint_s, wall_before=
         message=message or ("" if status == 0 else "failed"), stats=stats, changes=changes,
         versions=library_versions(),
         # (no slow-down warning: the progress trace counts each birth's model building and remap)
-        warnings=regime_warnings(scene, sorted((out / PHASES).glob("phase-*")), ()),
+        warnings=regime_warnings(scene, sorted((out / PHASES).glob("phase-*")), ())
+        + missed_birth_warnings(scene, _read_folder(out / "reel") if (out / "reel").is_dir() else pd.DataFrame()),
     )  # fmt: skip
     _write_json(out / RUN_JSON, record)
     (out / CHECKPOINT).unlink(missing_ok=True)
     return record
+
+
+def missed_birth_warnings(scene, reel: pd.DataFrame) -> list[dict]:
+    """A spool law's first rod longer than its birth bound by more than half a rod: a birth the
+    run did not take (its event is located only as the rod crosses the bound from below, so a rod
+    that starts a phase already past it -- two reels at their bounds at one instant, the other
+    one's birth ending the phase -- grows on unnoticed).  The run is still a solution of the
+    equations, with longer rods than the scene asks for; the warning says so, with where and when."""
+    out = []
+    if reel.empty:
+        return out
+    for t in scene.tethers:
+        r = t.reel
+        if r is None or r.spool is None:
+            continue
+        rows = reel[reel["reel"] == t.name]
+        if rows.empty:
+            continue
+        first = rows["deployed_length_m"].to_numpy() - (rows["rods"].to_numpy() - 1) * r.rod_length_m
+        bad = np.flatnonzero(first > r.birth_length_m + 0.5 * r.rod_length_m)
+        if bad.size:
+            j = int(bad[0])
+            t_s = float(rows["t_s"].to_numpy()[j])
+            out.append({"kind": "missed birth", "t_s": t_s,
+                        "text": f"reel {t.name!r}: its first rod is {float(first.max()):.6g} m long at most, past its "
+                                f"birth bound ({r.birth_length_m:.6g} m) by more than half a rod from t = {t_s:.6g} s: "
+                                f"a birth was not taken there (it started a phase already past the bound), so its rods "
+                                f"are longer than tethers.{t.name}.reel.rod_length asks"})  # fmt: skip
+    return out
 
 
 # ----------------------------------------------------------------------------------------------

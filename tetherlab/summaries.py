@@ -16,6 +16,8 @@ tip body):
   theta smoothed over 1/12 of a period (the faster lateral modes removed).
 * :func:`lateral_frequency`: first lateral (string) mode: zero crossings of the in-plane
   distance of the middle node from the root-tip chord, mean removed.
+* :func:`deployment`: a scene with reels (the others refuse one, naming the key): per reel the
+  deployed length, speed, rods and angle at the end, births, retirements, the largest exit tension.
 * :func:`final_state`: every body's final position, for work-precision errors.
 * :func:`invariants`: NaN check, angular momentum and energy drift in units of the tether's own
   angular momentum and rotational energy, final positions (hard cases).
@@ -34,7 +36,47 @@ import numpy as np
 def _run(scene):
     from .pipeline import simulate
 
+    reels = [t.name for t in scene.tethers if t.reel is not None]
+    if reels:  # its run is a DeploymentResult of phases, not one Result these summaries read
+        raise ValueError(f"scene {scene.name!r} has a reel (tethers.{reels[0]}.reel): this summary reads a run of a "
+                         f"fixed rod count; use summary = \"tetherlab.summaries:deployment\"")  # fmt: skip
     return simulate(scene, progress=False)
+
+
+def deployment(scene) -> dict[str, float]:
+    """A run with reels: per reel tether (``<name>.`` prefixed) the deployed length, speed, rods and
+    in-plane angle at the end, the largest exit tension and |angle|, the births and retirements and
+    the energy taken at the exit (brake and Carnot loss, J); for the run its end time, whether a
+    reel's line ran out (``spent``: 1 or 0) and the cost summed over the phases.  The angle is the
+    tether's ``theta_rad`` diagnostic (the libration angle; NaN for a scene without an orbit)."""
+    import pandas as pd
+
+    from .pipeline import simulate
+
+    run = simulate(scene, progress=False)
+    out: dict[str, float] = {"t_end_s": float(run.reel["t_s"].iloc[-1]),
+                             "spent": float(bool(run.stopped_by) and run.stopped_by.endswith(".spent"))}
+    for name, r in run.reel.groupby("reel", sort=False):
+        kinds = [c["change"] for c in run.changes if c["reel"] == name]
+        th = pd.concat([ph.diagnostics[f"{name}.theta_rad"] for ph in run.phases if f"{name}.theta_rad" in
+                        ph.diagnostics], ignore_index=True) if scene.orbit is not None else pd.Series([math.nan])  # fmt: skip
+        out.update({
+            f"{name}.deployed_length_m": float(r["deployed_length_m"].iloc[-1]),
+            f"{name}.speed_m_s": float(r["speed_m_s"].iloc[-1]),
+            f"{name}.rods": float(r["rods"].iloc[-1]),
+            f"{name}.births": float(kinds.count("birth")),
+            f"{name}.retirements": float(kinds.count("retire")),
+            f"{name}.max_exit_tension_N": float(r["exit_tension_N"].max()),
+            f"{name}.carnot_J": float(r["carnot_J"].iloc[-1]),
+            f"{name}.theta_end_rad": float(th.iloc[-1]) if len(th) else math.nan,
+            f"{name}.max_abs_theta_rad": float(th.abs().max()) if len(th) else math.nan,
+        })  # fmt: skip
+    out["exit_work_J"] = float(run.invariants["exit_work_J"].iloc[-1])
+    stats = [ph.stats for ph in run.phases]
+    out.update(wall_s=float(sum(s.get("wall_s", 0.0) for s in stats)),
+               n_rhs=float(sum(s.get("n_rhs", 0) for s in stats)),
+               n_steps=float(sum(s.get("n_accepted", 0) for s in stats)))  # fmt: skip
+    return out
 
 
 def _cost(res) -> dict[str, float]:

@@ -442,6 +442,32 @@ def _run_dask(jobs, scheduler, finish, bar) -> None:
 # --------------------------------------------------------------------------------------------
 
 
+def reel_bound_changes(base, changes: dict[str, Any]) -> dict[str, Any]:
+    """``changes`` plus, for each reel whose ``rod_length`` it changes, the removal of the birth and
+    retirement bounds that ``base`` has at their defaults (1.5 and 0.25 rod lengths,
+    tetherlab/scene/reels.py), so that they follow the new rod length.  ``Scene.to_dict`` writes
+    every bound as a length, so without this a sweep over the rod length would keep the base's
+    bounds: rods of 500 m born at 3 km, not the deployment the user meant.  A bound given
+    explicitly (other than the default) or changed in the same point is kept."""
+    from .scene.reels import BIRTH_DEFAULT, RETIRE_DEFAULT
+
+    out = dict(changes)
+    for key in changes:
+        parts = key.split(".")
+        if len(parts) != 4 or parts[0] != "tethers" or parts[2:] != ["reel", "rod_length"]:
+            continue
+        tether = next((t for t in base.tethers if t.name == parts[1] and t.reel is not None), None)
+        if tether is None:
+            continue
+        r = tether.reel
+        for name, fraction, value in (("birth_length", BIRTH_DEFAULT, r.birth_length_m),
+                                      ("retire_length", RETIRE_DEFAULT, r.retire_length_m)):  # fmt: skip
+            bound = f"tethers.{parts[1]}.reel.{name}"
+            if bound not in changes and math.isclose(value, fraction * r.rod_length_m, rel_tol=1e-12):
+                out[bound] = None
+    return out
+
+
 @dataclass
 class StudyCase:
     """One sweep of a study: a base scene, fixed changes, a grid, a summary function."""
@@ -464,14 +490,14 @@ class StudyCase:
 
         base = load_scene(self.scene_path)
         if self.set:
-            base = base.replace(**self.set)
+            base = base.replace(**reel_bound_changes(base, self.set))
         adjust = resolve(self.adjust, base_dir) if self.adjust else None
         scenes, points = [], self.points()
         for point in points:
             # the hook's changes go into the same replace as the point's: a rod count and the
             # per-rod angles it needs must change together to form a valid scene
             changes = {**point, **(adjust(base, point) if adjust is not None else {})}
-            scenes.append(base.replace(**changes) if changes else base)
+            scenes.append(base.replace(**reel_bound_changes(base, changes)) if changes else base)
         return scenes, points
 
 
