@@ -240,9 +240,6 @@ def test_a_first_rod_past_its_birth_bound_is_warned_of():
     assert reelstore.missed_birth_warnings(scene, reel.iloc[:2]) == []
 
 
-@pytest.mark.xfail(strict=True, reason="a reel whose first rod starts a phase at its birth bound (another reel's "
-                   "birth ended the phase at that instant) is never born again: its event is located only as the rod "
-                   "crosses the bound from below (deployment.run_phases)")
 def test_every_spoke_of_the_symmetric_hub_is_born(tmp_path):
     # by symmetry the four first rods reach 15 m together at 6.0 s and again at 16.7 s (t3's birth in
     # the run): every reel must then have 4 rods
