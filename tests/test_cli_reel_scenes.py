@@ -50,7 +50,10 @@ SHORT = {
     "reel-retrieval": ("1000 s", 1, 2),
     "reel-retrieval-tension": ("3.8 orbits", 4, 10),
     "reel-yes2-like": ("2.05 orbits", 3, 5),
-    "reel-hub-spoke": ("8 s", 4, 2),  # the four births at 6 s end one phase together (docs/deployment.md 17.1)
+    # the hub: t2's birth at 6.0002191886 s ends the first phase; the three others' rods are then
+    # below the bound by more than the event's bracket, so a phase of 9e-12 s ends at theirs, all
+    # three taken together (docs/deployment.md 17.1)
+    "reel-hub-spoke": ("8 s", 4, 3),
 }
 
 
@@ -154,9 +157,9 @@ def test_cli_resumes_a_shipped_reel_scene_across_a_birth(tmp_path, monkeypatch, 
     assert main(["run", str(f), "--out", str(out), "--quiet"]) == 130
     assert f"tetherlab run --resume {out}" in capsys.readouterr().err
     rec = json.loads((out / "run.json").read_text())
-    # the four births at 6 s are taken at the end of the first phase, one remap after the other
-    # (docs/deployment.md 17.1): the second is interrupted with one phase written
-    assert rec["state"] == "interrupted" and len(rec["phases"]) == 1
+    # the second birth ends the second phase (9e-12 s long, SHORT's note), with the third and
+    # fourth in the same remap sequence (docs/deployment.md 17.1)
+    assert rec["state"] == "interrupted" and len(rec["phases"]) == 2
     monkeypatch.undo()
     assert main(["run", "--resume", str(out), "--quiet"]) == 0
     a, b = reelstore.load(out), reelstore.load(ref)
