@@ -351,6 +351,44 @@ def _spool_change(stopped_by, tethers):
     return None
 
 
+def due_changes(tethers, state: dict, prep, y_end, t_a: float, t_b: float, t_end: float, first) -> list:
+    """Every reel tether whose first rod is at or past a bound at t_b, the end of a phase that a
+    change of ``first`` (its tether) ended: [(tether, kind), ...], ``first``'s change first, kinds
+    as :func:`next_change`'s.  A change not taken here is never taken: the next phase would start
+    with the rod already at its bound, and neither of the two ways a change is found sees that --
+    :func:`next_change` skips a time within 1e-12 t + 1e-9 s of the phase's start (the change just
+    made), and a spool law's event is a change of side of g = l - bound, so a rod starting at
+    g >= 0 never crosses (docs/deployment.md 17.1).  Hence, per law:
+
+    * prescribed (constant, exponential, table): due when its next change falls at or before
+      t_b (1 + 1e-12) + 1e-9, exactly the window the next phase would skip;
+    * spool: due when l >= l_birth - tol (l <= l_retire + tol), with tol the error of the located
+      stop in length: |L'| times the event bracket's width (integrators/common.py
+      event_time_tolerance: 64 eps max(|t_b|, |h|), h <= t_b - t_a) plus the round-off of
+      l = L - (n - 1) l_rod (4 eps L).  A rod farther below than tol starts the next phase with
+      g < 0 and its crossing is located there."""
+    from .integrators.common import EPS, event_time_tolerance
+
+    out = [first]
+    for t in tethers:
+        if t is first[0]:
+            continue
+        reel, n = t.reel, state[t.name]
+        if reel.spool is None:
+            tc, kind = next_change(reel, t.length_m, n, t_a, t_end)
+            if kind is not None and tc <= t_b * (1.0 + 1e-12) + 1e-9:
+                out.append((t, kind))
+            continue
+        L, speed = (float(x) for x in y_end[prep.model.state.spool_of(_kernel_index(prep, t.name))])
+        l_first = L - (n - 1) * reel.rod_length_m
+        tol = abs(speed) * event_time_tolerance(t_b, t_b - t_a) + 4.0 * EPS * abs(L)
+        if l_first >= reel.birth_length_m - tol:
+            out.append((t, "birth"))
+        elif l_first <= reel.retire_length_m + tol:
+            out.append((t, "retire" if n > 1 else "retrieved"))
+    return out
+
+
 def _rows(model, t, Y):
     """The reel table and the material invariants of a phase's rows."""
     from .tether.reel_diagnostics import R_NCOL, reel_rows
@@ -562,49 +600,61 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
             if nxt[1] == "knot":  # the same model goes on from the knot
                 loop = dict(loop, phase=ph + 1, t_a=t_b, y=res.y_end)
                 continue
-            # a birth, a retirement, or the last rod retrieved: the phase ends at t_b
-            t = nxt[2]
-            reel = t.reel
-            n = state[t.name]
-            lay_old = prep.model.state
-            g0 = prep.model.rod_slices[[x.name for x in prep.model.tethers].index(t.name)].start
-            if reel.spool is not None:  # its length and rate are state
-                L, speed = (float(x) for x in res.y_end[prep.model.state.spool_of(_kernel_index(prep, t.name))])
-            else:
-                L = length_at(reel, t.length_m, t_b)
-                speed = speed_at(reel, t.length_m, t_b)
-            if nxt[1] == "retrieved":
+            # a birth, a retirement, or the last rod retrieved: the phase ends at t_b, with every
+            # reel at its bound there (due_changes), one remap after the other at t_b
+            due = due_changes(tethers, state, prep, res.y_end, t_a, t_b, t_end, (nxt[2], nxt[1]))
+            retrieved = [(t, kind) for t, kind in due if kind == "retrieved"]
+            if retrieved:
+                t = retrieved[0][0]
                 stopped = f"reel.{t.name}.retrieved"
                 message = (f"run stopped at t = {t_b:.9g} s: the tether {t.name!r} was retrieved to its last rod's "
-                           f"retirement bound ({reel.retire_length_m:.6g} m deployed); outputs up to it are kept")  # fmt: skip
-                changes.append({"t_s": t_b, "reel": t.name, "change": "retrieved", "rods": n})
+                           f"retirement bound ({t.reel.retire_length_m:.6g} m deployed); outputs up to it are kept")  # fmt: skip
+                changes.append({"t_s": t_b, "reel": t.name, "change": "retrieved", "rods": state[t.name]})
                 break
-            l_first = L - (n - 1) * reel.rod_length_m
-            n_new = n + 1 if nxt[1] == "birth" else n - 1
-            state = dict(state, **{t.name: n_new})
-            model_rods = {x.name: (state[x.name], _deployed(x, prep, res.y_end, t_b)) for x in tethers}
-            nxt_prep = prepare(scene, reel_phase={"first": prep0, "rods": model_rods}, **opts)
-            lay_new = nxt_prep.model.state
-            y_end = res.y_end
-            if nxt[1] == "birth" and reel.birth == "quasi-static":
-                k = [x.name for x in prep.model.tethers].index(t.name)
-                y, _ = quasi_static_birth_state(prep.model, nxt_prep.model, y_end, k, l_first,
-                                                l_first - reel.rod_length_m, reel.rod_length_m, speed, t_b,
-                                                t.mass_kg / t.length_m)
-            elif nxt[1] == "birth":
-                y = birth_state(lay_old, lay_new, y_end, g0, l_first, l_first - reel.rod_length_m, speed)
-            else:
-                k = [x.name for x in prep.model.tethers].index(t.name)
-                rho = t.mass_kg / t.length_m
-                y = retire_state(prep.model, nxt_prep.model, y_end, k, rho, l_first, reel.rod_length_m, speed, t_b,
-                                 angular=remap_defect != "linear-only")
-            changes = changes + [{"t_s": t_b, "reel": t.name, "change": nxt[1], "rods": n_new}]
-            prep = nxt_prep
+            y = res.y_end
+            for t, kind in due:
+                prep, y, state, model_rods = _remap(scene, opts, prep0, prep, y, state, tethers, t, kind, t_b,
+                                                    remap_defect)  # fmt: skip
+                changes = changes + [{"t_s": t_b, "reel": t.name, "change": kind, "rods": state[t.name]}]
             loop = {"phase": ph + 1, "t_a": t_b, "y": y, "rods": state, "model_rods": model_rods, "changes": changes}
     finally:
         if bar is not None:
             bar.close()
     return status, message, stopped, loop["changes"]
+
+
+def _remap(scene, opts, prep0, prep, y_end, state, tethers, t, kind: str, t_b: float, remap_defect):
+    """One birth or retirement of tether t at t_b: (the next model's prep, its state, the rods per
+    reel tether, the rods and lengths the model was built with)."""
+    from .pipeline import prepare
+
+    reel = t.reel
+    n = state[t.name]
+    lay_old = prep.model.state
+    k = _kernel_index(prep, t.name)
+    g0 = prep.model.rod_slices[k].start
+    if reel.spool is not None:  # its length and rate are state
+        L, speed = (float(x) for x in y_end[prep.model.state.spool_of(k)])
+    else:
+        L = length_at(reel, t.length_m, t_b)
+        speed = speed_at(reel, t.length_m, t_b)
+    l_first = L - (n - 1) * reel.rod_length_m
+    n_new = n + 1 if kind == "birth" else n - 1
+    state = dict(state, **{t.name: n_new})
+    model_rods = {x.name: (state[x.name], _deployed(x, prep, y_end, t_b)) for x in tethers}
+    nxt_prep = prepare(scene, reel_phase={"first": prep0, "rods": model_rods}, **opts)
+    lay_new = nxt_prep.model.state
+    if kind == "birth" and reel.birth == "quasi-static":
+        y, _ = quasi_static_birth_state(prep.model, nxt_prep.model, y_end, k, l_first,
+                                        l_first - reel.rod_length_m, reel.rod_length_m, speed, t_b,
+                                        t.mass_kg / t.length_m)
+    elif kind == "birth":
+        y = birth_state(lay_old, lay_new, y_end, g0, l_first, l_first - reel.rod_length_m, speed)
+    else:
+        rho = t.mass_kg / t.length_m
+        y = retire_state(prep.model, nxt_prep.model, y_end, k, rho, l_first, reel.rod_length_m, speed, t_b,
+                         angular=remap_defect != "linear-only")
+    return nxt_prep, y, state, model_rods
 
 
 def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect: int = 0,
