@@ -128,6 +128,7 @@ def restore(model, t_s: float, y: np.ndarray, target: np.ndarray, c_target: np.n
     info = {"a": np.zeros(3), "omega": np.zeros(3), "shift_m": np.zeros(3)}
     lay = model.state
     roots = _roots(model)
+    pos = None
     for _ in range(passes):
         if translate:
             c, mass = centre_of_mass(model, t_s, z)
@@ -136,7 +137,8 @@ def restore(model, t_s: float, y: np.ndarray, target: np.ndarray, c_target: np.n
             info["shift_m"] = info["shift_m"] + (c_target - c)
         else:
             c, mass = c_target, float("nan")
-        pos = point_positions(model, z)["bodies"]
+        if translate or pos is None:  # a velocity increment leaves the positions: kept for the next pass
+            pos = point_positions(model, z)["bodies"]
         # the state and its six unit increments in one evaluation of the columns (each row is
         # evaluated on its own, so the same numbers as seven evaluations)
         units = rigid_increments(model, z, _UNIT_A, _UNIT_W, c_target, pos, roots)
