@@ -194,7 +194,7 @@ def quasi_static_birth_state(model_old, model_new, y: np.ndarray, k: int, l_m: f
     (tetherlab/momentum_remap.py; docs/deployment.md 6.4).  Returns (state, info) with the
     offsets applied; a tether of one rod (no next joint) is cut straight.  ``restore_momenta=False``:
     the joint moved and nothing restored (the negative control of the momentum test)."""
-    from .momentum_remap import _roots, centre_of_mass, momenta, restore
+    from .momentum_remap import _roots, centre_and_momenta, restore
 
     lay_old, lay_new = model_old.state, model_new.state
     g0 = model_old.rod_slices[k].start
@@ -214,11 +214,10 @@ def quasi_static_birth_state(model_old, model_new, y: np.ndarray, k: int, l_m: f
     # back exactly, from the masses, not from the momentum columns: on an orbit those give the
     # centre of mass to ~1e-5 m only (H ~ r x P, differences of 1e13), which is ~0.1 J of
     # potential energy in the central field (docs/deployment.md 6.4)
-    c_old, mass = centre_of_mass(model_old, t_s, y)
+    c_old, mass, before = centre_and_momenta(model_old, t_s, y)
     shift = -rho_kg_m * l_m * delta / (2.0 * mass)
     for b in _roots(model_new):
         z[lay_new.root_position(b)] += shift
-    before = momenta(model_old, t_s, y[None, :])[0]
     z, info = restore(model_new, t_s, z, before, c_old, translate=False)
     info["mass_kg"] = mass
     info["delta_m"], info["delta_rate_m_s"], info["shift_m"] = delta, ddelta, shift

@@ -49,19 +49,47 @@ def rigid_increment(model, y: np.ndarray, a: np.ndarray, omega: np.ndarray, c: n
     it the constraints are still met, but not by the least change of kinetic energy).  ``pos``:
     the bodies' positions of y (system.point_positions "bodies"), when the caller has them (the six
     columns of one solve share them: the increment changes velocities only)."""
+    return rigid_increments(model, y, np.asarray(a, float)[None, :], np.asarray(omega, float)[None, :], c, pos)[0]
+
+
+def rigid_increments(model, y: np.ndarray, a: np.ndarray, omega: np.ndarray, c: np.ndarray,
+                     pos: np.ndarray | None = None, roots: list[int] | None = None) -> np.ndarray:
+    """(n, len(y)): the rows of :func:`rigid_increment` for the n increments (a[i], omega[i]),
+    in whole-array passes over the increments and the rods (a birth's remap applies some twenty of
+    them to a state of ~250 numbers: one numpy call per root and rod block instead of one per
+    increment keeps its cost off the per-call overhead; docs/deployment.md 8f).  Each number is
+    the same product and sum as one increment at a time, in the same order, so the same bits."""
     lay = model.state
-    z = np.array(y, float)
+    a = np.asarray(a, float)
+    omega = np.asarray(omega, float)
+    y = np.asarray(y, float)
+    z = np.repeat(y[None, :], len(a), axis=0)
     if pos is None:
         from .system import point_positions
 
         pos = point_positions(model, y)["bodies"]
-    for b in _roots(model):
-        z[lay.root_velocity(b)] += a + np.cross(omega, pos[b, :3] - c)
-    # every rod at once (the same products as one rod at a time)
-    z[lay.rods_dd] += np.cross(omega, y[lay.rods_d].reshape(-1, 3)).ravel()
+    for b in _roots(model) if roots is None else roots:
+        z[:, lay.root_velocity(b)] += a + _cross(omega, pos[b, :3] - c)
+    # every rod at once: (n, 1, 3) x (1, rods, 3)
+    z[:, lay.rods_dd] += _cross(omega[:, None, :], y[lay.rods_d].reshape(1, -1, 3)).reshape(len(a), -1)
     for b, _ in lay.rigid:
-        z[lay.omega_of(b)] += _body_to_inertial(y[lay.quaternion_of(b)]).T @ omega
+        R = _body_to_inertial(y[lay.quaternion_of(b)])
+        for i in range(len(omega)):
+            z[i, lay.omega_of(b)] += R.T @ omega[i]
     return z
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """u x v over the last axis (broadcast), with numpy.cross's products and differences in its
+    order (a1 b2 - a2 b1, a2 b0 - a0 b2, a0 b1 - a1 b0), so the same bits without its axis
+    handling, which is most of its cost on 3-vectors."""
+    u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
+    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
+    out = np.empty(np.broadcast_shapes(u.shape, v.shape))
+    out[..., 0] = u1 * v2 - u2 * v1
+    out[..., 1] = u2 * v0 - u0 * v2
+    out[..., 2] = u0 * v1 - u1 * v0
+    return out
 
 
 def _body_to_inertial(q: np.ndarray) -> np.ndarray:
@@ -99,21 +127,26 @@ def restore(model, t_s: float, y: np.ndarray, target: np.ndarray, c_target: np.n
     z = np.array(y, float)
     info = {"a": np.zeros(3), "omega": np.zeros(3), "shift_m": np.zeros(3)}
     lay = model.state
+    roots = _roots(model)
+    pos = None
     for _ in range(passes):
         if translate:
             c, mass = centre_of_mass(model, t_s, z)
-            for b in _roots(model):  # every position hangs from a root's through the rods' d
+            for b in roots:  # every position hangs from a root's through the rods' d
                 z[lay.root_position(b)] += c_target - c
             info["shift_m"] = info["shift_m"] + (c_target - c)
         else:
             c, mass = c_target, float("nan")
-        base = momenta(model, t_s, z[None, :])[0]
-        pos = point_positions(model, z)["bodies"]
-        cols = [rigid_increment(model, z, e, np.zeros(3), c_target, pos) for e in np.eye(3)]
-        cols += [rigid_increment(model, z, np.zeros(3), e, c_target, pos) for e in np.eye(3)]
-        A = (momenta(model, t_s, np.array(cols)) - base).T
+        if translate or pos is None:  # a velocity increment leaves the positions: kept for the next pass
+            pos = point_positions(model, z)["bodies"]
+        # the state and its six unit increments in one evaluation of the columns (each row is
+        # evaluated on its own, so the same numbers as seven evaluations)
+        units = rigid_increments(model, z, _UNIT_A, _UNIT_W, c_target, pos, roots)
+        rows = momenta(model, t_s, np.vstack([z[None, :], units]))
+        base = rows[0]
+        A = (rows[1:] - base).T
         x = _solve(A, target - base)
-        z = rigid_increment(model, z, x[:3], x[3:], c_target, pos)
+        z = rigid_increments(model, z, x[None, :3], x[None, 3:], c_target, pos, roots)[0]
         info["a"] = info["a"] + x[:3]
         info["omega"] = info["omega"] + x[3:]
         info["c"] = c
@@ -139,16 +172,30 @@ def centre_of_mass(model, t_s: float, y: np.ndarray) -> tuple[np.ndarray, float]
     """(c, M) of the state's material from the response of its momenta to a translation of its
     velocity: dP/da = M I and dH/da = M [c x] (H about the origin), so c is the centre of mass
     of exactly the material the momenta count (bodies, stored tether, rods)."""
+    c, mass, _ = centre_and_momenta(model, t_s, y)
+    return c, mass
+
+
+def centre_and_momenta(model, t_s: float, y: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """(c, M, P and H) of the state: :func:`centre_of_mass` and :func:`momenta` of its one row,
+    from one evaluation of the columns on the state and its three unit translations (each row is
+    evaluated on its own, so the same numbers as separate calls)."""
     from .system import point_positions
 
-    base = momenta(model, t_s, np.asarray(y, float)[None, :])[0]
-    pos = point_positions(model, np.asarray(y, float))["bodies"]
-    units = [rigid_increment(model, y, e, np.zeros(3), np.zeros(3), pos) for e in np.eye(3)]
-    rt = momenta(model, t_s, np.array(units)) - base
+    y = np.asarray(y, float)
+    pos = point_positions(model, y)["bodies"]
+    units = rigid_increments(model, y, np.eye(3), np.zeros((3, 3)), np.zeros(3), pos)
+    rows = momenta(model, t_s, np.vstack([y[None, :], units]))
+    base = rows[0]
+    rt = rows[1:] - base
     if not (np.all(np.isfinite(base)) and np.all(np.isfinite(rt))):
         raise ValueError("momentum restore: expected a state with finite momenta; got a non-finite value")
     mass = float(np.trace(rt[:, :3])) / 3.0
     if not mass > 0.0:
         raise ValueError(f"momentum restore: expected a positive total mass; got {mass!r} kg")
     Cx = rt[:, 3:].T / mass  # column j: c x e_j
-    return np.array([Cx[2, 1], Cx[0, 2], Cx[1, 0]]), mass
+    return np.array([Cx[2, 1], Cx[0, 2], Cx[1, 0]]), mass, base
+
+
+_UNIT_A = np.vstack([np.eye(3), np.zeros((3, 3))])  # the six unit increments (a, omega) of a solve
+_UNIT_W = np.vstack([np.zeros((3, 3)), np.eye(3)])
