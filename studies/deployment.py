@@ -34,7 +34,9 @@ F. Slow retrieval (adiabatic invariant): 10 km hauled in at l'/l = -0.02 Omega f
    7000 km orbit, libration started 5 deg off the steady angle: A l / (A0 l0) stays 1 within 0.021
    (|c|/sqrt3 + A^2/8 + 4 l/a). Control: a kernel that ignores the law (DEFECT_REEL_FROZEN).
 G. Rod-count convergence of a deployment (nominal rod length halved) and the birth bounds varied
-   (docs/deployment.md 8c): measured and reported, not gated.
+   (docs/deployment.md 8c): every halving's ratio of successive differences below 1/2 (at least first
+   order) and the bounds' move within e(2h) + e(h). Control of both: the birth's cut against the
+   nominal rod length (deployment.birth_defect("cut-nominal")).
 H. A spinning rigid hub with a wheel pays out from a reel off its centre of mass under three laws
    (studies/deployment_hub.py): total angular momentum (hub, wheel, stored tether and spool, rods)
    within 100 rtol |H(0)|, momentum and E + W_exit as above; what the attitude does in a figure.
