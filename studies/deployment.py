@@ -1135,7 +1135,8 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "centripetal term dropped the momentum and energy; the strain rate without the l' term brakes the deployment; a kernel ignoring the law "
         "leaves A l unconserved and the retrieval 87 deg off the pendulum; the spool limits' three defects "
         "(the unlimited command or no brake in the balance, the limit's upper corner dropped) each fail the "
-        "limits' gates they reach. The birth remap (B) has no control: it is Python (deployment.birth_state), "
+        "limits' gates they reach; the birth's cut against the nominal rod length fails part G's convergence "
+        "and birth-bound gates. The birth remap (B) has no control: it is Python (deployment.birth_state), "
         "which no defect of the kernel reaches.",
         "",
         table(rows),
