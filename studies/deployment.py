@@ -34,7 +34,9 @@ F. Slow retrieval (adiabatic invariant): 10 km hauled in at l'/l = -0.02 Omega f
    7000 km orbit, libration started 5 deg off the steady angle: A l / (A0 l0) stays 1 within 0.021
    (|c|/sqrt3 + A^2/8 + 4 l/a). Control: a kernel that ignores the law (DEFECT_REEL_FROZEN).
 G. Rod-count convergence of a deployment (nominal rod length halved) and the birth bounds varied
-   (docs/deployment.md 8c): measured and reported, not gated.
+   (docs/deployment.md 8c): every halving's ratio of successive differences below 1/2 (at least first
+   order) and the bounds' move within e(2h) + e(h). Control of both: the birth's cut against the
+   nominal rod length (deployment.birth_defect("cut-nominal")).
 H. A spinning rigid hub with a wheel pays out from a reel off its centre of mass under three laws
    (studies/deployment_hub.py): total angular momentum (hub, wheel, stored tether and spool, rods)
    within 100 rtol |H(0)|, momentum and E + W_exit as above; what the attitude does in a figure.
@@ -108,7 +110,7 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from tetherlab.deployment import _rows, birth_state, simulate_reel  # noqa: E402
+from tetherlab.deployment import _rows, birth_defect, birth_state, simulate_reel  # noqa: E402
 from tetherlab.model.params import DEFECT_REEL_FROZEN, DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED  # noqa: E402
 from tetherlab.pipeline import prepare  # noqa: E402
 from tetherlab.scene import Scene  # noqa: E402
@@ -901,42 +903,80 @@ def convergence_quantities(run) -> tuple[float, float]:
     return theta, float(np.linalg.norm(rel - (rel @ r0) * r0))
 
 
+CONV_RATIO_BOUND = 0.5  # d(h)/d(2h) of successive differences: at least first order (docs/deployment.md 8c)
+
+
+def convergence_ratios(v: list) -> list:
+    """The ratios d_{i+1}/d_i of the successive differences d_i = |v_{i+1} - v_i| of a quantity over
+    rod lengths halved level by level (infinite where a difference vanishes before a nonzero one)."""
+    d = [abs(v[i + 1] - v[i]) for i in range(len(v) - 1)]
+    return [d[i + 1] / d[i] if d[i] > 0 else (0.0 if d[i + 1] == 0 else math.inf) for i in range(len(d) - 1)]
+
+
 def part_convergence():
     """G: the deployment of convergence_scene with the rod length halved three times, the observed
     order from the three finest levels and Richardson's estimate of the finest level's error; then
     the 250 m level with other birth bounds against the budget e(2h) + e(h): bounds of at most two
     rods make the rods next to the reel at most twice as long, so the result may move by the
-    discretisation error of the level above plus its own (docs/deployment.md 8c). Measured, not
-    gated: no deliberate defect was found that these self-convergence measures catch (a birth that
-    drops the transport velocity converges too, to another limit)."""
+    discretisation error of the level above plus its own (docs/deployment.md 8c). Gated: every
+    halving's ratio of successive differences against 1/2 (at least first order: a birth's error
+    must shrink faster than the births multiply) and the birth bounds' move against e(2h) + e(h);
+    the birth cut against the nominal rod length (deployment.birth_defect) is the control of both."""
+    rows, (ratio, bounds) = _convergence_runs(control=False)
+    with birth_defect("cut-nominal"):
+        rows_cut, (ratio_cut, bounds_cut) = _convergence_runs(control=True)
+    gates = {"deployment_convergence_ratio_over_bound": ratio,
+             "deployment_convergence_cut_nominal_negative_control": 1.0 / ratio_cut if ratio_cut > 0 else math.inf,
+             "deployment_birth_bounds_over_budget": bounds,
+             "deployment_birth_bounds_cut_nominal_negative_control": 1.0 / bounds_cut if bounds_cut > 0 else math.inf}
+    return rows + rows_cut, gates, None
+
+
+def _convergence_runs(control: bool):
+    """Part G's runs and rows; (the largest ratio of successive differences over CONV_RATIO_BOUND,
+    the largest birth-bound move over its budget), each over both quantities.  ``control``: the
+    rows named as the control's (the caller sets the defect) and only the gated ones."""
+    tag = "control cut-nominal: " if control else ""
     runs = {h: simulate_reel(convergence_scene(h)) for h in CONV_RODS_M}
     q = {h: convergence_quantities(r) for h, r in runs.items()}
-    rows, out = [], {}
+    rows, out, ratio = [], {}, 0.0
     for j, (name, unit) in enumerate((("end angle", "rad"), ("end offset", "m"))):
         v = [q[h][j] for h in CONV_RODS_M]
         d = [abs(v[i + 1] - v[i]) for i in range(len(v) - 1)]
         order = math.log2(d[-2] / d[-1]) if d[-1] > 0 else math.inf
         p = min(order, 2.0)  # no more than the rods' second order (docs/deployment.md 8c)
-        err = {CONV_RODS_M[i + 1]: d[i] * 2**p / (2**p - 1) for i in range(len(d))}
+        # Richardson needs a converging sequence (p > 0); otherwise the error estimate is infinite
+        err = {CONV_RODS_M[i + 1]: (d[i] * 2**p / (2**p - 1) if p > 0 else math.inf) for i in range(len(d))}
         out[name] = (v, order, err)
-        for h, x in zip(CONV_RODS_M, v):
-            rows.append({"case": f"G {name}, rods of {h:g} m", "value": x, "bound": float("nan"),
-                         "over bound": float("nan"), "unit": unit,
-                         "note": f"{sum(1 for c in runs[h].changes if c['change'] == 'birth')} births"})  # fmt: skip
-        rows.append({"case": f"G {name}: observed order (levels {CONV_RODS_M[-3]:g}-{CONV_RODS_M[-1]:g} m)",
-                     "value": order, "bound": float("nan"), "over bound": float("nan"), "unit": "1",
-                     "note": f"Richardson error of the {CONV_RODS_M[-1]:g} m level ~ {err[CONV_RODS_M[-1]]:.3g} {unit}"})  # fmt: skip
+        if not control:
+            for h, x in zip(CONV_RODS_M, v):
+                rows.append({"case": f"G {name}, rods of {h:g} m", "value": x, "bound": float("nan"),
+                             "over bound": float("nan"), "unit": unit,
+                             "note": f"{sum(1 for c in runs[h].changes if c['change'] == 'birth')} births"})  # fmt: skip
+            rows.append({"case": f"G {name}: observed order (levels {CONV_RODS_M[-3]:g}-{CONV_RODS_M[-1]:g} m)",
+                         "value": order, "bound": float("nan"), "over bound": float("nan"), "unit": "1",
+                         "note": f"Richardson error of the {CONV_RODS_M[-1]:g} m level ~ {err[CONV_RODS_M[-1]]:.3g} {unit}"})  # fmt: skip
+        r = max(convergence_ratios(v))
+        ratio = max(ratio, r / CONV_RATIO_BOUND)
+        rows.append({"case": f"G {tag}{name}: largest d(h)/d(2h) over the halvings", "value": r,
+                     "bound": CONV_RATIO_BOUND, "over bound": r / CONV_RATIO_BOUND, "unit": "1",
+                     "note": "must exceed its bound (the birth's cut against the nominal rod)" if control
+                     else "at least first order (docs/deployment.md 8c)"})  # fmt: skip
     h = CONV_RODS_M[-2]
+    bounds = 0.0
     for fb, fr in CONV_BOUNDS:
         qb = convergence_quantities(simulate_reel(convergence_scene(h, fb, fr)))
         for j, (name, unit) in enumerate((("end angle", "rad"), ("end offset", "m"))):
             v, order, err = out[name]
-            budget = err[h] + err[2 * h] if 2 * h in err else float("nan")
+            budget = err[h] + err[2 * h]
             diff = abs(qb[j] - q[h][j])
-            rows.append({"case": f"G {name}, {h:g} m rods, birth {fb:g}, retire {fr:g} rods", "value": diff,
-                         "bound": budget, "over bound": diff / budget, "unit": unit,
-                         "note": "against birth 1.5, retire 0.25; budget e(2h) + e(h)"})  # fmt: skip
-    return rows, {}, None
+            over = diff / budget if budget > 0 else (0.0 if diff == 0 else math.inf)
+            bounds = max(bounds, over)
+            rows.append({"case": f"G {tag}{name}, {h:g} m rods, birth {fb:g}, retire {fr:g} rods", "value": diff,
+                         "bound": budget, "over bound": over, "unit": unit,
+                         "note": "against birth 1.5, retire 0.25; budget e(2h) + e(h)"
+                         + ("; the control must exceed it somewhere" if control else "")})  # fmt: skip
+    return rows, (ratio, bounds)
 
 
 def figures(out: Path, free: dict, expo: dict | None, retr: dict | None) -> list[str]:
@@ -1095,7 +1135,8 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "centripetal term dropped the momentum and energy; the strain rate without the l' term brakes the deployment; a kernel ignoring the law "
         "leaves A l unconserved and the retrieval 87 deg off the pendulum; the spool limits' three defects "
         "(the unlimited command or no brake in the balance, the limit's upper corner dropped) each fail the "
-        "limits' gates they reach. The birth remap (B) has no control: it is Python (deployment.birth_state), "
+        "limits' gates they reach; the birth's cut against the nominal rod length fails part G's convergence "
+        "and birth-bound gates. The birth remap (B) has no control: it is Python (deployment.birth_state), "
         "which no defect of the kernel reaches.",
         "",
         table(rows),

@@ -121,6 +121,19 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
             assert (gate in by_defect[defect]) == expect, (ctrl_gate, ctrl)
 
 
+def test_the_birth_cut_defect_is_credited_only_through_part_g_control_gates():
+    # the birth's cut against the nominal rod is Python (deployment.birth_defect), run by
+    # studies/deployment.py part G itself: each passing control credits it to its gate, a failing or
+    # missing one credits nothing
+    for ctrl_gate, gate in (("deployment_convergence_cut_nominal_negative_control", "deployment_convergence_ratio_over_bound"),
+                            ("deployment_birth_bounds_cut_nominal_negative_control", "deployment_birth_bounds_over_budget")):  # fmt: skip
+        thr = GATES[ctrl_gate]["threshold"]
+        for ctrl, expect in ((0.5 * thr, True), (2.0 * thr, False), (None, False)):
+            by_defect, by_gate, _ = verify.mutation_summary({}, GATES, {ctrl_gate: ctrl})
+            assert (gate in by_defect.get("birth_cut_nominal", [])) == expect, (ctrl_gate, ctrl)
+            assert ("birth_cut_nominal" in by_gate.get(ctrl_gate, [])) == expect, (ctrl_gate, ctrl)
+
+
 def _reel_params(name):
     p = prepare(load_scene(ROOT / "studies" / "scenes" / "lateral-two-rods.toml")).model.fresh_params()
     mutants.MUTANTS[name].mutate(p)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tetherlab import deployment
 from tetherlab.deployment import _rows, birth_state, simulate_reel
 from tetherlab.errors import SceneError
 from tetherlab.model.params import DEFECT_REEL_FROZEN, DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED
@@ -101,6 +102,27 @@ def test_birth_keeps_mass_momentum_and_energy_to_round_off():
     assert abs(ke_b - ke_a) <= 1e-12 * ke_a
     assert abs(db["global"][0, D.G_VE] - da["global"][0, D.G_VE]) <= 1e-12 * da["global"][0, D.G_VE] + 1e-300
     assert new.model.rod_lengths().tolist() == [50.0, 50.0, 50.0, 50.0]
+
+
+def test_the_birth_defect_cuts_against_the_nominal_rod_and_only_inside_its_context():
+    # deployment.birth_defect("cut-nominal"), the control of part G's gates (docs/deployment.md 8c):
+    # a first rod of l = 120 m cut at la = 20 m from the reel (rods of 100 m) gets the chord
+    # la/(l - la) d = d/5 instead of la/l d = d/6; outside the context the cut is exact again
+    scene = _free_scene()
+    first = prepare(scene)
+    old = prepare(scene, reel_phase={"first": first, "rods": {"main": (3, 200.0)}})
+    new = prepare(scene, reel_phase={"first": first, "rods": {"main": (4, 200.0)}})
+    y = first.y0.copy()
+    d = y[old.model.state.rod(0)].copy()
+    with deployment.birth_defect("cut-nominal"):
+        z = birth_state(old.model.state, new.model.state, y, 0, 120.0, 20.0, 2.0)
+    assert np.allclose(z[new.model.state.rod(0)], d / 5.0, rtol=1e-15, atol=0.0)
+    z = birth_state(old.model.state, new.model.state, y, 0, 120.0, 20.0, 2.0)
+    assert np.allclose(z[new.model.state.rod(0)], d / 6.0, rtol=1e-15, atol=0.0)
+    with pytest.raises(ValueError, match="birth_defect: expected 'cut-nominal'; got 'cut'"):
+        with deployment.birth_defect("cut"):
+            pass
+    assert deployment._BIRTH_DEFECT is None
 
 
 def test_energy_balance_of_the_canister():

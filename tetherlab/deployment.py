@@ -17,6 +17,7 @@ bodies, stored tether and rods, and the energy taken out at the exit, integrated
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass, field, replace
 
@@ -152,6 +153,28 @@ def reel_start(model, y0: np.ndarray) -> np.ndarray:
     return y
 
 
+# A negative control of the birth remap (the convergence gate of docs/deployment.md 8c): None in every
+# user run; set only inside :func:`birth_defect`.
+_BIRTH_DEFECT = None
+
+
+@contextlib.contextmanager
+def birth_defect(name: str):
+    """Run the births of :func:`birth_state` with a deliberate defect (negative controls only).
+    "cut-nominal": the cut's fraction la/l taken against the nominal rod length l - la instead of
+    the first rod's length l, so the new joint sits at la/(l - la) of the chord (1/2 instead of 1/3
+    at a birth of 1.5 rods): the new rods are strained by a fixed fraction whatever the rod length,
+    an error per birth that does not shrink with the rods."""
+    global _BIRTH_DEFECT
+    if name not in ("cut-nominal",):
+        raise ValueError(f"birth_defect: expected 'cut-nominal'; got {name!r}")
+    _BIRTH_DEFECT = name
+    try:
+        yield
+    finally:
+        _BIRTH_DEFECT = None
+
+
 def birth_state(lay_old, lay_new, y: np.ndarray, g0: int, l_m: float, la_m: float, speed_m_s: float) -> np.ndarray:
     """The state after a birth: rod g0 (length l, at the reel) cut at the material point la from
     the reel into a new first rod (la, varying) and a full rod (l - la).  Every point of the line
@@ -160,6 +183,8 @@ def birth_state(lay_old, lay_new, y: np.ndarray, g0: int, l_m: float, la_m: floa
     d = y[lay_old.rod(g0)]
     dd = y[lay_old.rod_rate(g0)]
     f = la_m / l_m
+    if _BIRTH_DEFECT == "cut-nominal":  # negative control only (birth_defect)
+        f = la_m / (l_m - la_m)
     lam = speed_m_s / l_m
     d_a = f * d
     dd_a = f * dd + (1.0 - f) * lam * d

@@ -279,6 +279,11 @@ def mutation_summary(cells, gates: dict, study_values: dict):
          ("deployment_limits_torque_over_budget",)),
         ("deployment_yes2_hold_3l_negative_control", "tension_3l", ("deployment_yes2_hold_over_budget",)),
         ("deployment_retrieval_settle_3l_negative_control", "tension_3l", ("deployment_retrieval_settle_over_budget",)),
+        # (the birth's cut is Python: deployment.birth_state under deployment.birth_defect, run by the study)
+        ("deployment_convergence_cut_nominal_negative_control", "birth_cut_nominal",
+         ("deployment_convergence_ratio_over_bound",)),
+        ("deployment_birth_bounds_cut_nominal_negative_control", "birth_cut_nominal",
+         ("deployment_birth_bounds_over_budget",)),
         ("deployment_seds_canister_negative_control", "canister_as_drum",
          ("deployment_seds_reduced_over_budget", "deployment_seds_energy_over_bound")),
     ):  # fmt: skip

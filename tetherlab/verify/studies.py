@@ -219,6 +219,11 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_seds_reduced_over_budget": g.get("deployment_seds_reduced_over_budget"),
         "deployment_seds_energy_over_bound": g.get("deployment_seds_energy_over_bound"),
         "deployment_seds_canister_negative_control": g.get("deployment_seds_canister_negative_control"),
+        # part G: rod-count convergence and the birth bounds (studies/deployment.py, docs/deployment.md 8c)
+        "deployment_convergence_ratio_over_bound": g.get("deployment_convergence_ratio_over_bound"),
+        "deployment_convergence_cut_nominal_negative_control": g.get("deployment_convergence_cut_nominal_negative_control"),
+        "deployment_birth_bounds_over_budget": g.get("deployment_birth_bounds_over_budget"),
+        "deployment_birth_bounds_cut_nominal_negative_control": g.get("deployment_birth_bounds_cut_nominal_negative_control"),
     }
 
 
