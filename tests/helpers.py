@@ -177,3 +177,21 @@ def call_cfunc(f, t: float, y, p, n_out: int | None = None) -> tuple[int, np.nda
     out = np.empty(y.size if n_out is None else n_out)
     st = f.ctypes(t, y.ctypes.data_as(P), out.ctypes.data_as(P), np.ascontiguousarray(p).ctypes.data_as(P))
     return st, out
+
+
+def interrupt_at_birth(monkeypatch, n: int):
+    """A Ctrl-C while the n-th birth remaps the state (between two phases)."""
+    import signal
+
+    from tetherlab import deployment
+
+    calls = [0]
+    real = deployment.birth_state
+
+    def birth(*args, **kw):
+        calls[0] += 1
+        if calls[0] == n:
+            signal.raise_signal(signal.SIGINT)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(deployment, "birth_state", birth)

@@ -14,12 +14,12 @@ from __future__ import annotations
 import json
 import math
 import re
-import signal
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from tests.helpers import interrupt_at_birth
 from tetherlab import deployment, reelstore
 from tetherlab.cli import main
 from tetherlab.scene import Scene, load_scene
@@ -135,25 +135,11 @@ def test_a_shortened_staged_scene_is_refused_naming_the_stage(tmp_path, capsys):
     assert "tethers.main.reel.stages[0].start" in err and "before 600 s" in err and "10813.6 s" in err
 
 
-def _interrupt_at_birth(monkeypatch, n: int):
-    """A Ctrl-C while the n-th birth remaps the state (between two phases)."""
-    calls = [0]
-    real = deployment.birth_state
-
-    def birth(*args, **kw):
-        calls[0] += 1
-        if calls[0] == n:
-            signal.raise_signal(signal.SIGINT)
-        return real(*args, **kw)
-
-    monkeypatch.setattr(deployment, "birth_state", birth)
-
-
 def test_cli_resumes_a_shipped_reel_scene_across_a_birth(tmp_path, monkeypatch, capsys):
     f = _short_copy(tmp_path, "reel-hub-spoke", "8 s", count=17)
     ref, out = tmp_path / "ref", tmp_path / "o"
     assert main(["run", str(f), "--out", str(ref), "--quiet"]) == 0
-    _interrupt_at_birth(monkeypatch, 2)
+    interrupt_at_birth(monkeypatch, 2)
     assert main(["run", str(f), "--out", str(out), "--quiet"]) == 130
     assert f"tetherlab run --resume {out}" in capsys.readouterr().err
     rec = json.loads((out / "run.json").read_text())

@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tests.helpers import interrupt_at_birth
 from tetherlab import deployment, reelstore
 from tetherlab.cli import main
 from tetherlab.errors import SceneError
@@ -164,20 +165,6 @@ def _interrupt_on_call(monkeypatch, k: int, signum=signal.SIGINT):
     monkeypatch.setattr(driver, "_call_kernel", call)
 
 
-def _interrupt_at_birth(monkeypatch, n: int):
-    """A Ctrl-C while the n-th birth remaps the state (between two phases)."""
-    calls = [0]
-    real = deployment.birth_state
-
-    def birth(*args, **kw):
-        calls[0] += 1
-        if calls[0] == n:
-            signal.raise_signal(signal.SIGINT)
-        return real(*args, **kw)
-
-    monkeypatch.setattr(deployment, "birth_state", birth)
-
-
 @pytest.mark.parametrize("where", ["mid-phase", "at-birth"])
 def test_interrupted_reel_run_resumes_bit_for_bit(tmp_path, monkeypatch, small_chunks, reference, where):
     ref, rec_ref, _ = reference
@@ -185,7 +172,7 @@ def test_interrupted_reel_run_resumes_bit_for_bit(tmp_path, monkeypatch, small_c
     if where == "mid-phase":
         _interrupt_on_call(monkeypatch, 40)  # inside the second phase or later, between two chunks
     else:
-        _interrupt_at_birth(monkeypatch, 2)
+        interrupt_at_birth(monkeypatch, 2)
     with pytest.raises(Interrupted) as info:
         run_to_dir(_scene(), out, progress=False, checkpoint_s=1e9, part_rows=PART_ROWS)
     assert f"tetherlab run --resume {out}" in str(info.value)
