@@ -24,6 +24,11 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+# Run as a script, Python puts tests/ first on the path, not the checkout: an environment
+# installed from another checkout (a git worktree's shared venv) would then compare that
+# checkout's package with itself.  The package beside this file is the one under test.
+if str(ROOT) not in sys.path[:1]:
+    sys.path.insert(0, str(ROOT))
 SCENES = sorted((ROOT / "studies" / "scenes").glob("*.toml"))
 
 #: per-scene duration override for the short stretch (the scene's own when shorter)

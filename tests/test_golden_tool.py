@@ -47,3 +47,15 @@ def test_an_unknown_scene_name_is_refused_before_anything_runs(tmp_path, fake_ru
     assert ran == []
     out = capsys.readouterr().out
     assert "unknown scene name(s) 'no-such-scene': expected file stems of studies/scenes/*.toml" in out
+
+
+def test_run_as_a_script_it_imports_the_package_beside_it():
+    # a worktree sharing another checkout's venv: without its own root first on the path, the
+    # tool imported the installed checkout's tetherlab and compared that one with itself
+    import subprocess
+    import sys
+
+    code = (f"import runpy; runpy.run_path({str(golden.ROOT / 'tests' / 'golden.py')!r}, run_name='golden'); "
+            "import tetherlab; print(tetherlab.__file__)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd="/")
+    assert out.stdout.strip() == str(golden.ROOT / "tetherlab" / "__init__.py")
