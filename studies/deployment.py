@@ -36,7 +36,7 @@ F. Slow retrieval (adiabatic invariant): 10 km hauled in at l'/l = -0.02 Omega f
 G. Rod-count convergence of a deployment (nominal rod length halved) and the birth bounds varied
    (docs/deployment.md 8c): every halving's ratio of successive differences below 1/2 (at least first
    order) and the bounds' move within e(2h) + e(h). Control of both: the birth's cut against the
-   nominal rod length (deployment.birth_defect("cut-nominal")).
+   nominal rod length (simulate_reel(..., remap_defect="cut-nominal")).
 H. A spinning rigid hub with a wheel pays out from a reel off its centre of mass under three laws
    (studies/deployment_hub.py): total angular momentum (hub, wheel, stored tether and spool, rods)
    within 100 rtol |H(0)|, momentum and E + W_exit as above; what the attitude does in a figure.
@@ -110,7 +110,7 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from tetherlab.deployment import _rows, birth_defect, birth_state, simulate_reel  # noqa: E402
+from tetherlab.deployment import _rows, birth_state, simulate_reel  # noqa: E402
 from tetherlab.model.params import DEFECT_REEL_FROZEN, DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED  # noqa: E402
 from tetherlab.pipeline import prepare  # noqa: E402
 from tetherlab.scene import Scene  # noqa: E402
@@ -921,10 +921,9 @@ def part_convergence():
     discretisation error of the level above plus its own (docs/deployment.md 8c). Gated: every
     halving's ratio of successive differences against 1/2 (at least first order: a birth's error
     must shrink faster than the births multiply) and the birth bounds' move against e(2h) + e(h);
-    the birth cut against the nominal rod length (deployment.birth_defect) is the control of both."""
+    the birth cut against the nominal rod length (remap_defect "cut-nominal") is the control of both."""
     rows, (ratio, bounds) = _convergence_runs(control=False)
-    with birth_defect("cut-nominal"):
-        rows_cut, (ratio_cut, bounds_cut) = _convergence_runs(control=True)
+    rows_cut, (ratio_cut, bounds_cut) = _convergence_runs(control=True)
     gates = {"deployment_convergence_ratio_over_bound": ratio,
              "deployment_convergence_cut_nominal_negative_control": 1.0 / ratio_cut if ratio_cut > 0 else math.inf,
              "deployment_birth_bounds_over_budget": bounds,
@@ -935,9 +934,11 @@ def part_convergence():
 def _convergence_runs(control: bool):
     """Part G's runs and rows; (the largest ratio of successive differences over CONV_RATIO_BOUND,
     the largest birth-bound move over its budget), each over both quantities.  ``control``: the
-    rows named as the control's (the caller sets the defect) and only the gated ones."""
+    runs with the birth's cut against the nominal rod (remap_defect "cut-nominal"), the rows
+    named as the control's and only the gated ones."""
     tag = "control cut-nominal: " if control else ""
-    runs = {h: simulate_reel(convergence_scene(h)) for h in CONV_RODS_M}
+    defect = "cut-nominal" if control else None
+    runs = {h: simulate_reel(convergence_scene(h), remap_defect=defect) for h in CONV_RODS_M}
     q = {h: convergence_quantities(r) for h, r in runs.items()}
     rows, out, ratio = [], {}, 0.0
     for j, (name, unit) in enumerate((("end angle", "rad"), ("end offset", "m"))):
@@ -965,7 +966,7 @@ def _convergence_runs(control: bool):
     h = CONV_RODS_M[-2]
     bounds = 0.0
     for fb, fr in CONV_BOUNDS:
-        qb = convergence_quantities(simulate_reel(convergence_scene(h, fb, fr)))
+        qb = convergence_quantities(simulate_reel(convergence_scene(h, fb, fr), remap_defect=defect))
         for j, (name, unit) in enumerate((("end angle", "rad"), ("end offset", "m"))):
             v, order, err = out[name]
             budget = err[h] + err[2 * h]

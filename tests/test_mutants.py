@@ -122,7 +122,7 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
 
 
 def test_the_birth_cut_defect_is_credited_only_through_part_g_control_gates():
-    # the birth's cut against the nominal rod is Python (deployment.birth_defect), run by
+    # the birth's cut against the nominal rod is Python (simulate_reel's remap_defect), run by
     # studies/deployment.py part G itself: each passing control credits it to its gate, a failing or
     # missing one credits nothing
     for ctrl_gate, gate in (("deployment_convergence_cut_nominal_negative_control", "deployment_convergence_ratio_over_bound"),

@@ -21,7 +21,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tetherlab import deployment
 from tetherlab.deployment import _rows, birth_state, simulate_reel
 from tetherlab.errors import SceneError
 from tetherlab.model.params import DEFECT_REEL_FROZEN, DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED
@@ -104,25 +103,34 @@ def test_birth_keeps_mass_momentum_and_energy_to_round_off():
     assert new.model.rod_lengths().tolist() == [50.0, 50.0, 50.0, 50.0]
 
 
-def test_the_birth_defect_cuts_against_the_nominal_rod_and_only_inside_its_context():
-    # deployment.birth_defect("cut-nominal"), the control of part G's gates (docs/deployment.md 8c):
-    # a first rod of l = 120 m cut at la = 20 m from the reel (rods of 100 m) gets the chord
-    # la/(l - la) d = d/5 instead of la/l d = d/6; outside the context the cut is exact again
+def test_the_cut_nominal_defect_cuts_against_the_nominal_rod_only_when_asked():
+    # remap_defect "cut-nominal", the control of part G's gates (docs/deployment.md 8c): a first rod
+    # of l = 120 m cut at la = 20 m from the reel (rods of 100 m) gets the chord la/(l - la) d = d/5
+    # instead of la/l d = d/6; without the argument the cut is exact
     scene = _free_scene()
     first = prepare(scene)
     old = prepare(scene, reel_phase={"first": first, "rods": {"main": (3, 200.0)}})
     new = prepare(scene, reel_phase={"first": first, "rods": {"main": (4, 200.0)}})
     y = first.y0.copy()
     d = y[old.model.state.rod(0)].copy()
-    with deployment.birth_defect("cut-nominal"):
-        z = birth_state(old.model.state, new.model.state, y, 0, 120.0, 20.0, 2.0)
+    z = birth_state(old.model.state, new.model.state, y, 0, 120.0, 20.0, 2.0, remap_defect="cut-nominal")
     assert np.allclose(z[new.model.state.rod(0)], d / 5.0, rtol=1e-15, atol=0.0)
     z = birth_state(old.model.state, new.model.state, y, 0, 120.0, 20.0, 2.0)
     assert np.allclose(z[new.model.state.rod(0)], d / 6.0, rtol=1e-15, atol=0.0)
-    with pytest.raises(ValueError, match="birth_defect: expected 'cut-nominal'; got 'cut'"):
-        with deployment.birth_defect("cut"):
-            pass
-    assert deployment._BIRTH_DEFECT is None
+
+
+def test_the_cut_nominal_defect_reaches_the_births_of_a_run():
+    # simulate_reel threads remap_defect down to the birth: the free scene's first birth (t = 12.5 s,
+    # first rod l = 75 m cut at la = 25 m, rods of 50 m) leaves the new first rod at la/(l - la) = 1/2
+    # of the chord instead of 1/3, so its strain is l/(l - la) - 1 = 0.5 instead of the line's ~1e-5;
+    # the phase before the birth is the same bit for bit
+    scene = _free_scene(duration="13 s", count=14)
+    run = simulate_reel(scene)
+    cut = simulate_reel(scene, remap_defect="cut-nominal")
+    assert [c["t_s"] for c in cut.changes] == [c["t_s"] for c in run.changes] == [12.5]
+    assert run.phases[0].timeseries.equals(cut.phases[0].timeseries)
+    assert abs(float(run.phases[1].timeseries["main.rod1.strain"].iloc[0])) <= 1e-3
+    assert abs(float(cut.phases[1].timeseries["main.rod1.strain"].iloc[0]) - 0.5) <= 1e-3
 
 
 def test_energy_balance_of_the_canister():
@@ -249,7 +257,8 @@ def test_restore_refuses_a_non_finite_state():
 
 
 def test_remap_defect_is_checked():
-    with pytest.raises(ValueError, match="remap_defect"):
+    with pytest.raises(ValueError, match="remap_defect: expected None or one of 'linear-only', 'cut-nominal'; "
+                                         "got 'nonsense'"):
         simulate_reel(_free_scene(), remap_defect="nonsense")
 
 

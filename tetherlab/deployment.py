@@ -17,7 +17,6 @@ bodies, stored tether and rods, and the energy taken out at the exit, integrated
 
 from __future__ import annotations
 
-import contextlib
 import math
 from dataclasses import dataclass, field, replace
 
@@ -153,37 +152,33 @@ def reel_start(model, y0: np.ndarray) -> np.ndarray:
     return y
 
 
-# A negative control of the birth remap (the convergence gate of docs/deployment.md 8c): None in every
-# user run; set only inside :func:`birth_defect`.
-_BIRTH_DEFECT = None
+#: The deliberate defects of the Python remaps (negative controls only; None in every user run),
+#: passed down as ``remap_defect`` from :func:`simulate_reel` / :func:`run_phases`:
+#: "linear-only": a retirement restores the linear momentum only (the remap before section 6.3 of
+#: docs/deployment.md); "cut-nominal": a birth's cut fraction la/l taken against the nominal rod
+#: length l - la instead of the first rod's length l, so the new joint sits at la/(l - la) of the
+#: chord (1/2 instead of 1/3 at a birth of 1.5 rods): the new rods are strained by a fixed fraction
+#: whatever the rod length, an error per birth that does not shrink with the rods (docs 8c).
+REMAP_DEFECTS = ("linear-only", "cut-nominal")
 
 
-@contextlib.contextmanager
-def birth_defect(name: str):
-    """Run the births of :func:`birth_state` with a deliberate defect (negative controls only).
-    "cut-nominal": the cut's fraction la/l taken against the nominal rod length l - la instead of
-    the first rod's length l, so the new joint sits at la/(l - la) of the chord (1/2 instead of 1/3
-    at a birth of 1.5 rods): the new rods are strained by a fixed fraction whatever the rod length,
-    an error per birth that does not shrink with the rods."""
-    global _BIRTH_DEFECT
-    if name not in ("cut-nominal",):
-        raise ValueError(f"birth_defect: expected 'cut-nominal'; got {name!r}")
-    _BIRTH_DEFECT = name
-    try:
-        yield
-    finally:
-        _BIRTH_DEFECT = None
+def check_remap_defect(remap_defect) -> None:
+    if remap_defect is not None and remap_defect not in REMAP_DEFECTS:
+        raise ValueError(f"remap_defect: expected None or one of {', '.join(map(repr, REMAP_DEFECTS))}; "
+                         f"got {remap_defect!r}")
 
 
-def birth_state(lay_old, lay_new, y: np.ndarray, g0: int, l_m: float, la_m: float, speed_m_s: float) -> np.ndarray:
+def birth_state(lay_old, lay_new, y: np.ndarray, g0: int, l_m: float, la_m: float, speed_m_s: float,
+                remap_defect: str | None = None) -> np.ndarray:
     """The state after a birth: rod g0 (length l, at the reel) cut at the material point la from
     the reel into a new first rod (la, varying) and a full rod (l - la).  Every point of the line
     keeps its position and its material velocity v_A + s D' + (1 - s) w (docs/deployment.md 6.1),
-    so mass, momentum, angular momentum and kinetic energy are those of before, to round-off."""
+    so mass, momentum, angular momentum and kinetic energy are those of before, to round-off.
+    ``remap_defect``: "cut-nominal" for the negative control (:data:`REMAP_DEFECTS`)."""
     d = y[lay_old.rod(g0)]
     dd = y[lay_old.rod_rate(g0)]
     f = la_m / l_m
-    if _BIRTH_DEFECT == "cut-nominal":  # negative control only (birth_defect)
+    if remap_defect == "cut-nominal":  # negative control only (REMAP_DEFECTS)
         f = la_m / (l_m - la_m)
     lam = speed_m_s / l_m
     d_a = f * d
@@ -212,7 +207,7 @@ def quasi_static_offset(y, lay, g0: int, l_m: float, la_m: float, l2_m: float, s
 
 def quasi_static_birth_state(model_old, model_new, y: np.ndarray, k: int, l_m: float, la_m: float, l2_m: float,
                              speed_m_s: float, t_s: float, rho_kg_m: float,
-                             restore_momenta: bool = True) -> tuple[np.ndarray, dict]:
+                             restore_momenta: bool = True, remap_defect: str | None = None) -> tuple[np.ndarray, dict]:
     """The birth of :func:`birth_state` with the new joint moved by :func:`quasi_static_offset`
     (placed on the line's quasi-static shape, so that it does not ring), then the centre of mass,
     momentum and angular momentum of before restored by the least change of kinetic energy
@@ -223,7 +218,7 @@ def quasi_static_birth_state(model_old, model_new, y: np.ndarray, k: int, l_m: f
 
     lay_old, lay_new = model_old.state, model_new.state
     g0 = model_old.rod_slices[k].start
-    z = birth_state(lay_old, lay_new, y, g0, l_m, la_m, speed_m_s)
+    z = birth_state(lay_old, lay_new, y, g0, l_m, la_m, speed_m_s, remap_defect)
     if model_old.rod_slices[k].stop - g0 < 2:
         return z, {"delta_m": np.zeros(3), "delta_rate_m_s": np.zeros(3)}
     delta, ddelta = quasi_static_offset(y, lay_old, g0, l_m, la_m, l2_m, speed_m_s)
@@ -560,10 +555,8 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
     the rods and lengths the current model was built with, the changes so far): the sink is
     handed it before each phase, and a sink with ``resume`` set continues from one.  Returns
     (status, message, stopped_by, changes).  ``remap_defect``: negative controls of the Python
-    remap only ("linear-only": retirements restore the linear momentum only, as before section 6.3
-    of docs/deployment.md)."""
-    if remap_defect not in (None, "linear-only"):
-        raise ValueError(f"remap_defect: expected None or 'linear-only'; got {remap_defect!r}")
+    remaps only (:data:`REMAP_DEFECTS`)."""
+    check_remap_defect(remap_defect)
     from .pipeline import _ProgressBar, prepare, run_outcome
 
     tethers = reel_tethers(scene)
@@ -671,9 +664,9 @@ def _remap(scene, opts, prep0, prep, y_end, state, tethers, t, kind: str, t_b: f
     if kind == "birth" and reel.birth == "quasi-static":
         y, _ = quasi_static_birth_state(prep.model, nxt_prep.model, y_end, k, l_first,
                                         l_first - reel.rod_length_m, reel.rod_length_m, speed, t_b,
-                                        t.mass_kg / t.length_m)
+                                        t.mass_kg / t.length_m, remap_defect=remap_defect)
     elif kind == "birth":
-        y = birth_state(lay_old, lay_new, y_end, g0, l_first, l_first - reel.rod_length_m, speed)
+        y = birth_state(lay_old, lay_new, y_end, g0, l_first, l_first - reel.rod_length_m, speed, remap_defect)
     else:
         rho = t.mass_kg / t.length_m
         y = retire_state(prep.model, nxt_prep.model, y_end, k, rho, l_first, reel.rod_length_m, speed, t_b,
@@ -685,7 +678,8 @@ def simulate_reel(scene, *, progress=None, raise_on_failure: bool = True, defect
                   remap_defect: str | None = None) -> DeploymentResult:
     """Run a scene with reels phase by phase (module docstring), in memory.  A failed phase ends
     the run and keeps every output before it; a retrieval of the last rod stops it with the event
-    'reel.<tether>.retrieved'.  ``defect``: negative controls only (kernel/layout.py DEFECT_*)."""
+    'reel.<tether>.retrieved'.  ``defect``: negative controls only (kernel/layout.py DEFECT_*);
+    ``remap_defect``: those of the Python remaps (:data:`REMAP_DEFECTS`)."""
     from .pipeline import SimulationError
 
     sink = MemoryPhases(scene)

@@ -215,11 +215,27 @@ def shares(model, t: float, y: np.ndarray) -> np.ndarray:
     return out
 
 
+def has_orbital_frame(model) -> bool:
+    """Whether a run's outputs have an orbital frame: only about a central body (central gravity
+    among the effects, as the orbital elements; docs/model.md 7).  In free space the centre of
+    mass rests or drifts at an arbitrary place (often the origin, to round-off): a frame built
+    from it would turn with its round-off, so the angles measured in it would be noise."""
+    return "central_gravity" in getattr(model, "effect_names", ())
+
+
 def orbital_frame(r: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Rows: x radial (outward), y = z x x (along-track for a circular orbit), z along r x v."""
-    x = r / np.linalg.norm(r, axis=-1, keepdims=True)
+    """Rows: x radial (outward), y = z x x (along-track for a circular orbit), z along r x v.
+    Where (r, v) has no frame (r = 0, or r x v = 0: at the origin, or moving radially) its rows
+    are NaN, by design and without a floating-point warning; elsewhere the same bits as the plain
+    quotients (numpy's ``divide`` with ``where`` divides the same numbers)."""
+    r = np.asarray(r, float)
+    v = np.asarray(v, float)
+    rn = np.linalg.norm(r, axis=-1, keepdims=True)
     hvec = np.cross(r, v)
-    z = hvec / np.linalg.norm(hvec, axis=-1, keepdims=True)
+    hn = np.linalg.norm(hvec, axis=-1, keepdims=True)
+    ok = (rn > 0) & (hn > 0)
+    x = np.divide(r, rn, out=np.full(r.shape, np.nan), where=ok)
+    z = np.divide(hvec, hn, out=np.full(hvec.shape, np.nan), where=ok)
     y = np.cross(z, x)
     return np.stack([x, y, z], axis=-2)
 

@@ -273,8 +273,7 @@ def _shape(plt, res, tethers):
             P = np.array([[ts[f"{name}.node{j}.{a}_m"].iloc[row] for a in "xyz"] for j in nodes])
             r = np.array([ts[f"{roots[0]}.{a}_m"].iloc[row] for a in "xyz"])
             v = np.array([ts[f"{roots[0]}.v{a}_m_s"].iloc[row] for a in "xyz"])
-            with np.errstate(invalid="ignore", divide="ignore"):
-                F = orbital_frame(r[None], v[None])[0]
+            F = orbital_frame(r[None], v[None])[0]
             if not np.all(np.isfinite(F)):
                 F = np.eye(3)  # no orbit (free space): the scene's own axes
             loc = (P - P[0]) @ F.T

@@ -8,7 +8,10 @@ and on the terminal):
   (strain < ``COMPRESSION_STRAIN``): the TMED rod is a bar, it pushes as it pulls, which a real
   tether cannot (docs/scenes.md, ``tension_only``);
 * **tumbling**: a tether's libration angle θ or φ passed ±90 degrees: the libration became a
-  rotation (a tumbling tether, or a spinning system whose spin is meant);
+  rotation (a tumbling tether, or a spinning system whose spin is meant).  Only about a central
+  body: free space has no orbital frame, its angle columns are NaN (docs/model.md 7), and a
+  scene whose effects have no central gravity is not checked at all, so a run directory written
+  before those columns were NaN does not warn either;
 * **slow-down**: the simulated time advanced ``SLOWDOWN_FACTOR`` times slower per wall-clock second
   than at the start of the run (stiffness: a rod gone slack or nearly so, a collapse on the way);
 * **light rod**: a tether so much lighter than the lighter of its end bodies that the round-off
@@ -91,6 +94,13 @@ def _tumbling_facts(dg) -> dict:
             over = (th > 0.5 * math.pi) | (ph >= 0.5 * math.pi)
         out[name] = float(t[int(np.argmax(over))]) if over.any() else math.inf
     return out
+
+
+def _has_orbital_frame(scene_dict: dict) -> bool:
+    """A scene about a central body (the test of diagnostics.has_orbital_frame, read from the
+    scene's effects); a table of outputs handed without a scene's effects is taken as one."""
+    effects = scene_dict.get("effects") if isinstance(scene_dict, dict) else None
+    return effects is None or "central_gravity" in effects
 
 
 def _merge(a: dict, b: dict) -> dict:
@@ -205,7 +215,7 @@ def check_parts(scene, parts, progress=()) -> list[dict]:
         comp = _merge(comp, _compression_facts(ts, scene_dict))
         tumb = _merge(tumb, _tumbling_facts(dg))
     found = (light_rods(scene) if hasattr(scene, "tethers") else []) + _compression_warnings(comp)
-    turning = _tumbling_warnings(tumb)
+    turning = _tumbling_warnings(tumb) if _has_orbital_frame(scene_dict) else []
     if getattr(getattr(scene, "orbit", None), "spin", None) is not None:
         for w in turning:  # a spinning system is meant to turn: say so rather than alarm
             w["text"] += " (as the scene's [orbit] spin sets it going)"

@@ -152,11 +152,12 @@ class Result:
             # of mass is the scale that sees an error in the tether's rotation (gates.toml)
             h_int = diag.internal_angular_momentum_scale(model, Y[0])
             dcols["angmom_error_internal"] = dH / h_int if h_int > 0 else np.full(nrows, np.nan)
-            # libration angles of each tether (root -> tip line) in the centre of mass's orbital frame
+            # libration angles of each tether (root -> tip line) in the centre of mass's orbital
+            # frame; NaN in free space, which has none (docs/model.md 7)
             rc, vc = center_of_mass_rows(model, pts_rows)
             for k, tet in enumerate(model.tethers):
                 pos = nodes[tet.name]
-                if np.linalg.norm(np.cross(rc[0], vc[0])) > 0:
+                if diag.has_orbital_frame(model) and np.linalg.norm(np.cross(rc[0], vc[0])) > 0:
                     th, ph = diag.libration_angles(rc, vc, pos[:, 0], pos[:, -1], prep.sides[k])
                 else:
                     th = ph = np.full(nrows, np.nan)
@@ -296,7 +297,7 @@ def _rigid_diagnostics(model, Y, d, bodies, rots, nrows) -> dict:
     """Per rigid body: roll/pitch/yaw in its own orbit frame (3-2-1), the quaternion norm error,
     the commanded control torque; per wheel the motor torque and saturation flag; per tether end
     the force on the body (inertial) and, on a rigid body, its torque about G (body axes)."""
-    from .diagnostics import orbital_frame
+    from .diagnostics import has_orbital_frame, orbital_frame
 
     out: dict = {}
     if not model.rigid_index:
@@ -310,10 +311,10 @@ def _rigid_diagnostics(model, Y, d, bodies, rots, nrows) -> dict:
         out[f"{body.name}.quat_norm_error"] = 1.0 - np.linalg.norm(q, axis=1)
         r = bodies[:, b, :3]
         v = bodies[:, b, 3:]
-        with np.errstate(invalid="ignore", divide="ignore"):  # no orbit frame (r x v = 0): NaN angles
-            f = orbital_frame(r, v)  # rows: radial, along-track, normal
-            O = np.stack([np.cross(-f[:, 2], -f[:, 0]), -f[:, 2], -f[:, 0]], axis=-1)  # columns o1, o2, o3
-            C = np.einsum("nji,njk->nik", O, rots[:, b])  # body -> orbit
+        # rows: radial, along-track, normal; NaN where there is no orbit frame (free space, r x v = 0)
+        f = orbital_frame(r, v) if has_orbital_frame(model) else np.full((len(r), 3, 3), np.nan)
+        O = np.stack([np.cross(-f[:, 2], -f[:, 0]), -f[:, 2], -f[:, 0]], axis=-1)  # columns o1, o2, o3
+        C = np.einsum("nji,njk->nik", O, rots[:, b])  # body -> orbit
         out[f"{body.name}.roll_rad"] = np.arctan2(C[:, 2, 1], C[:, 2, 2])
         out[f"{body.name}.pitch_rad"] = np.arcsin(np.clip(-C[:, 2, 0], -1.0, 1.0))
         out[f"{body.name}.yaw_rad"] = np.arctan2(C[:, 1, 0], C[:, 0, 0])

@@ -279,7 +279,7 @@ def mutation_summary(cells, gates: dict, study_values: dict):
          ("deployment_limits_torque_over_budget",)),
         ("deployment_yes2_hold_3l_negative_control", "tension_3l", ("deployment_yes2_hold_over_budget",)),
         ("deployment_retrieval_settle_3l_negative_control", "tension_3l", ("deployment_retrieval_settle_over_budget",)),
-        # (the birth's cut is Python: deployment.birth_state under deployment.birth_defect, run by the study)
+        # (the birth's cut is Python: simulate_reel's remap_defect "cut-nominal", run by the study)
         ("deployment_convergence_cut_nominal_negative_control", "birth_cut_nominal",
          ("deployment_convergence_ratio_over_bound",)),
         ("deployment_birth_bounds_cut_nominal_negative_control", "birth_cut_nominal",
