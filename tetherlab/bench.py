@@ -170,8 +170,9 @@ EXTRA_SECTIONS = (
     ("environment", "Environment effects: rhs cost per body and per rod, beside central gravity"),
     ("igrf", "IGRF-14 field: cost of one evaluation against the degree (target: degree 13 in a few us)"),
     ("rigid", "Right-hand-side cost: rigid root + 3 wheels + 4 tethers against the point-mass hub"),
-    ("deployment", "Deployment from a reel, 500 m to 20 km in one orbit (rods of 1000/500/250 m; straight and quasi-static "
-                   "births), against the same system at 20 km: wall "
+    ("deployment", "Deployment from a reel, 500 m to 20 km at constant speed in one orbit, or exponentially at "
+                   "L'/(Omega L) = 0.5 (rods of 1000/500/250 m; straight and quasi-static "
+                   "births), against the same system at 20 km over the same time: wall "
                    "time, cost per birth, exponent in the final rod count (targets: ratio <= 2 at 500 m rods, ~1)"),
 )
 

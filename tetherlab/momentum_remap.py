@@ -22,21 +22,72 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._jit import njit
+from .diagnostics import G_NCOL, G_PX, row_shares
+from .kernel.layout import BT_RIGID, BT_SIZE, H_MUTANT, H_NQT, H_NREEL, H_OFF_BODY, H_OFF_REEL, MUT_NO_ELASTIC_E, RL_BODY, RL_SIZE
+from .tether.reel_diagnostics import material_momentum
+from .tether.reel_hub import reel_hub_share
+from .tether.solve import system_accelerations
+
 
 def momenta(model, t_s: float, Y: np.ndarray) -> np.ndarray:
     """(rows, 6): the material momentum and angular momentum about the origin of each state row
     of ``Y`` at the time ``t_s``: bodies, stored tether and rods with the reel's corrections, the
-    columns the deployment invariants report (tetherlab/deployment.py)."""
-    from . import diagnostics as diag
-    from .deployment import _rows
+    columns the deployment invariants report (tetherlab/deployment.py ``_rows``).  Evaluated by
+    :func:`momentum_rows`, which computes only these columns: the same products and sums as the
+    whole diagnostics and reel table, so the same bits (docs/deployment.md 8g)."""
+    from .model.params import ParamView
 
-    Y = np.atleast_2d(np.asarray(Y, float))
-    out, d, _ = _rows(model, np.full(Y.shape[0], float(t_s)), Y)
-    g = d["global"]
-    corr = out[:, :, 9:15].sum(axis=1)
-    P = g[:, diag.G_PX : diag.G_PX + 3] + corr[:, 0:3]
-    H = g[:, diag.G_HX : diag.G_HX + 3] + corr[:, 3:6]
-    return np.hstack([P, H])
+    Y = np.ascontiguousarray(np.atleast_2d(np.asarray(Y, float)))
+    p = model.fresh_params()
+    lay = model.state
+    rows = Y.shape[0]
+    glob = np.empty((rows, 6))
+    corr = np.empty((rows, int(ParamView(p).n_reels), 6))
+    bad = momentum_rows(np.full(rows, float(t_s)), Y, p, glob, corr, np.zeros(lay.n_qt),
+                        np.zeros(lay.first_order.stop - lay.first_order.start))  # fmt: skip
+    if bad >= 0:  # as the whole diagnostics leave such a row: not a number, caught by the solve
+        glob[bad:] = np.nan
+        corr[bad:] = np.nan
+    c = corr.sum(axis=1)
+    return np.hstack([glob[:, 0:3] + c[:, 0:3], glob[:, 3:6] + c[:, 3:6]])
+
+
+@njit(cache=True)
+def momentum_rows(ts, Y, p, glob, corr, acc, datt):
+    """The momentum and angular momentum columns alone of every state row of Y: glob[row] the
+    parts' shares (diagnostics.row_shares, columns G_PX .. G_HZ), corr[row, reel] the reel's material
+    corrections (tether/reel_diagnostics.material_momentum and, on a rigid body, the stored
+    tether's share).  One right-hand side evaluation a row, where the whole diagnostics and the
+    reel table take one each.  Returns the first row whose right-hand side failed, or -1."""
+    h = int(p[H_NQT])
+    elastic = p[H_MUTANT] != MUT_NO_ELASTIC_E
+    sh = np.empty(G_NCOL)
+    for row in range(Y.shape[0]):
+        t = ts[row]
+        q = Y[row, :h]
+        qd = Y[row, h : 2 * h]
+        att = Y[row, 2 * h :]
+        if system_accelerations(t, q, qd, att, p, acc, datt) != 0:
+            return row
+        for i in range(int(p[H_NREEL])):
+            o = corr[row, i]
+            material_momentum(p, q, i, o, 0)
+            rb = int(p[H_OFF_REEL]) + i * RL_SIZE
+            if p[int(p[H_OFF_BODY]) + int(p[rb + RL_BODY]) * BT_SIZE + BT_RIGID] != 0.0:
+                s0, s1, s2, s3, s4, s5, _s6, _s7, _ring = reel_hub_share(p, i)
+                o[0] += s0
+                o[1] += s1
+                o[2] += s2
+                o[3] += s3
+                o[4] += s4
+                o[5] += s5
+        for j in range(G_NCOL):
+            sh[j] = 0.0
+        row_shares(t, q, qd, att, p, sh, elastic)
+        for j in range(6):
+            glob[row, j] = sh[G_PX + j]
+    return -1
 
 
 def rigid_increment(model, y: np.ndarray, a: np.ndarray, omega: np.ndarray, c: np.ndarray,

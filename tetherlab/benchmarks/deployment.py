@@ -15,6 +15,12 @@ line's (docs/deployment.md 8b says what that does to the answer); the rows with 
 "quasi-static"`` place each new joint on the line's quasi-static shape (docs/deployment.md 6.4).
 Rod lengths 1000, 500 and 250 m (20, 40, 80 rods at the end).
 
+The last two blocks (``law = "exponential"``) deploy the same line by L = L0 exp(c Omega t),
+c = 0.5, from 500 m to 20 km (1.17 orbits), started on the steady angle sin 2 theta = -4c/3 with
+the steady strain: the constant speed's c = L'/(Omega L) is ~6 at 500 m, beyond the |c| <= 3/4
+where a deploying line has a steady angle (docs/deployment.md 7).  Their fixed run is the same
+system at 20 km over that duration (docs/deployment.md 8g).
+
 The wall time is split into the integration (the driver's own clock, ``stats["wall_s"]``, summed
 over the phases: the compiled steps and the chunk loop around them) and the set-up, everything
 else: each phase's model, the remap of a birth, the phase's reel rows and invariants, the tables
@@ -29,38 +35,78 @@ set-up in the final rod count.
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
 
 ROD_LENGTHS_M = (1000.0, 500.0, 250.0)
-#: (error scale, birth) of each block of rows: the default, then the options that cut the steps
-OPTIONS = (("rod", "straight"), ("tether", "straight"), ("rod", "quasi-static"), ("tether", "quasi-static"))
+#: (law, error scale, birth) of each block of rows: the constant speed with the default, then with
+#: the options that cut the steps; then the exponential law inside its steady range (docs/deployment.md 8g)
+OPTIONS = (("constant", "rod", "straight"), ("constant", "tether", "straight"), ("constant", "rod", "quasi-static"),
+           ("constant", "tether", "quasi-static"), ("exponential", "tether", "straight"),
+           ("exponential", "tether", "quasi-static"))
 L0_M, L1_M = 500.0, 20000.0
+MU_M3_S2, A_M = 3.986004418e14, 7000e3
+M0_KG, MF_KG, EA_N, RHO_KG_M = 1000.0, 25.0, 1e4, 2e-4
+#: L'/(Omega L) of the exponential rows: inside |c| <= 3/4, where the line has a steady angle
+EXP_C = 0.5
 
 
-def _scene(rod_m: float, reel: bool, error_scale: str = "rod", birth: str = "straight"):
+def _scene(rod_m: float, reel: bool, error_scale: str = "rod", birth: str = "straight", law: str = "constant",
+           c: float = EXP_C):
+    """The bench's deployment (``reel``) or the same system fixed at 20 km over the same time.
+    ``law = "constant"``: L' = (L1 - L0)/T over one orbit T, from the local vertical at rest.
+    ``law = "exponential"``: L = L0 exp(c Omega t) until L1, started on its steady angle
+    sin 2 theta = -4c/3 with the steady strain (docs/deployment.md 7, 8g); the line moves out of
+    the reel at L'(0) (``deployment.reel_start``)."""
     from ..scene import Scene
 
-    import math
-
-    period = 2 * math.pi * math.sqrt((7000e3) ** 3 / 3.986004418e14)
-    tether = {"from": "m0", "to": "mf", "EA": "1e4 N", "linear_density": "2e-4 kg/m", "damping": "2e4 N s",
+    period, om = _orbit()
+    tether = {"from": "m0", "to": "mf", "EA": f"{EA_N} N", "linear_density": f"{RHO_KG_M} kg/m", "damping": "2e4 N s",
               "model": "paper", "initial": {"shape": "straight", "theta": "0 deg"}}
+    duration = period if law == "constant" else _exp_duration_s(c)
     if reel:
-        tether.update(length=f"{L0_M} m", reel={"law": "constant", "speed": f"{(L1_M - L0_M) / period} m/s",
-                                                "rod_length": f"{rod_m} m", "stored_length": f"{L1_M} m", "birth": birth})
+        if law == "constant":
+            rl = {"law": "constant", "speed": f"{(L1_M - L0_M) / period} m/s"}
+        else:
+            theta, strain = _steady_start(c, L0_M)
+            tether["initial"] = {"shape": "straight", "theta": f"{math.degrees(theta)!r} deg", "strain": strain}
+            rl = {"law": "exponential", "rate": f"{c * om!r} 1/s"}
+        tether.update(length=f"{L0_M} m", reel={**rl, "rod_length": f"{rod_m} m", "stored_length": f"{L1_M} m",
+                                                "birth": birth})
     else:
         tether.update(length=f"{L1_M} m", rods=int(round(L1_M / rod_m)))
     return Scene.from_dict({
-        "name": "deployment-bench", "duration": f"{period} s", "effects": {"central_gravity": {}},
-        "bodies": {"m0": {"mass": "1000 kg"}, "mf": {"mass": "25 kg"}},
+        "name": "deployment-bench", "duration": f"{duration!r} s", "effects": {"central_gravity": {}},
+        "bodies": {"m0": {"mass": f"{M0_KG} kg"}, "mf": {"mass": f"{MF_KG} kg"}},
         "orbit": {"reference": "center_of_mass", "motion": "corotating",
                   "elements": {"a": "7000 km", "e": 0.0, "i": "0 deg", "raan": "0 deg", "argp": "0 deg", "nu": "0 deg"}},
         "tethers": {"main": tether},
         "integrator": {"method": "radau5", "rtol": 1e-8, "atol": 1e-8, "error_scale": error_scale},
         "output": {"count": 101},
     })  # fmt: skip
+
+
+def _orbit() -> tuple[float, float]:
+    """(period s, rate rad/s) of the bench's 7000 km circular orbit."""
+    return 2 * math.pi * math.sqrt(A_M**3 / MU_M3_S2), math.sqrt(MU_M3_S2 / A_M**3)
+
+
+def _exp_duration_s(c: float) -> float:
+    """The time L0 exp(c Omega t) takes to reach L1."""
+    return math.log(L1_M / L0_M) / (c * _orbit()[1])
+
+
+def _steady_start(c: float, length_m: float) -> tuple[float, float]:
+    """(theta rad, strain) of the steady exponential deployment at ``length_m`` (docs/deployment.md
+    7: sin 2 theta = -4c/3, T = m* Omega^2 l (3 cos^2 theta - c^2), m* the bodies' reduced mass)."""
+    if not 0.0 < c <= 0.75:
+        raise ValueError(f"_steady_start: c must be in (0, 3/4] for a steady angle; got {c!r}")
+    om = _orbit()[1]
+    theta = 0.5 * math.asin(-4.0 * c / 3.0)
+    m_red = M0_KG * MF_KG / (M0_KG + MF_KG)
+    return theta, m_red * om**2 * length_m * (3 * math.cos(theta) ** 2 - c**2) / EA_N
 
 
 def _wall(scene) -> tuple[float, object]:
@@ -95,21 +141,23 @@ def bench_rows(rod_lengths=ROD_LENGTHS_M, options=OPTIONS) -> list[dict]:
     _wall(_scene(rod_lengths[0], True))  # warm-up: compilation excluded
     _wall(_scene(rod_lengths[0], True, "rod", "quasi-static"))
     _wall(_scene(rod_lengths[0], False))  # the fixed run's first call imports what a reel run does not
+    _wall(_scene(rod_lengths[0], True, "tether", "quasi-static", "exponential"))
     fixed_runs = {}
     rows = []
-    for scale, birth in options:
+    for law, scale, birth in options:
         walls, rods, setups = [], [], []
         for rod_m in rod_lengths:
-            w_reel, dep = _wall(_scene(rod_m, True, scale, birth))
-            # the fixed run, once per error scale and rod length, right after the first deployment
-            if (scale, rod_m) not in fixed_runs:
-                fixed_runs[(scale, rod_m)] = _wall(_scene(rod_m, False, scale))
-            w_fixed, fixed = fixed_runs[(scale, rod_m)]
+            w_reel, dep = _wall(_scene(rod_m, True, scale, birth, law))
+            # the fixed run, once per law (its duration), error scale and rod length, right after
+            # the first deployment that uses it
+            if (law, scale, rod_m) not in fixed_runs:
+                fixed_runs[(law, scale, rod_m)] = _wall(_scene(rod_m, False, scale, law=law))
+            w_fixed, fixed = fixed_runs[(law, scale, rod_m)]
             births = sum(1 for c in dep.changes if c["change"] == "birth")
             n_final = int(dep.reel["rods"].iloc[-1])
             (s_dep, r_dep), (s_fix, r_fix) = _counts(dep), _counts(fixed)
             setup = w_reel - _integration_s(dep)
-            rows.append({"error_scale": scale, "birth": birth, "rod_m": rod_m, "births": births, "final_rods": n_final,
+            rows.append({"law": law, "error_scale": scale, "birth": birth, "rod_m": rod_m, "births": births, "final_rods": n_final,
                          "deploy_s": w_reel, "fixed_s": w_fixed, "ratio": w_reel / w_fixed,
                          "per_birth_ms": 1e3 * (w_reel - w_fixed) / births if births else float("nan"),
                          "deploy_steps": s_dep, "deploy_rejected": r_dep, "fixed_steps": s_fix,
@@ -125,7 +173,7 @@ def bench_rows(rod_lengths=ROD_LENGTHS_M, options=OPTIONS) -> list[dict]:
         steps = [r["deploy_steps"] for r in rows[-len(rod_lengths):]]
         fit_steps = float(np.polyfit(np.log(rods), np.log(steps), 1)[0])
         fit_setup = float(np.polyfit(np.log(rods), np.log(setups), 1)[0])
-        rows.append({"error_scale": scale, "birth": birth, "rod_m": "fitted exponent (wall; steps; set-up)",
+        rows.append({"law": law, "error_scale": scale, "birth": birth, "rod_m": "fitted exponent (wall; steps; set-up)",
                      "births": "", "final_rods": "", "deploy_s": fit, "fixed_s": "", "ratio": "", "per_birth_ms": "",
                      "deploy_steps": fit_steps, "deploy_rejected": "", "fixed_steps": "", "fixed_rejected": "",
                      "step_ratio": "", "integration_s": "", "setup_s": fit_setup, "setup_per_birth_ms": "",

@@ -90,6 +90,36 @@ R_NCOL = len(REEL_COLUMNS)
 
 
 @njit(cache=True)
+def material_momentum(p, q, i, o, c0):
+    """Reel i's material corrections of momentum and angular momentum (the first rod's transport
+    w = lambda D: m w/2 and r_A x m w/2) into o[c0 .. c0 + 5], from the scratch of a right-hand side
+    evaluation at the state q; returns w.  Shared by :func:`reel_rows` and the momenta-only pass of
+    tetherlab/momentum_remap.py, so both make the same products in the same order."""
+    rb = int(p[H_OFF_REEL]) + i * RL_SIZE
+    rs = int(p[H_OFF_RSCR]) + i * RS_SIZE
+    k = int(p[rb + RL_TETH])
+    g = int(p[rb + RL_ROD])
+    m = p[int(p[H_OFF_ROD]) + g * RT_SIZE + RT_M]
+    lam = p[rs + RS_LAM]
+    # w = lambda D, D = 2 sqrt3 d
+    wx = lam * 2.0 * SQ3 * q[3 + 3 * g]
+    wy = lam * 2.0 * SQ3 * q[4 + 3 * g]
+    wz = lam * 2.0 * SQ3 * q[5 + 3 * g]
+    ts_ = int(p[H_OFF_BSCR]) + int(p[H_NBODY]) * BS_SIZE + k * TS_SIZE + TS_A
+    ax = p[ts_]
+    ay = p[ts_ + 1]
+    az = p[ts_ + 2]
+    hm = 0.5 * m
+    o[c0] = hm * wx
+    o[c0 + 1] = hm * wy
+    o[c0 + 2] = hm * wz
+    o[c0 + 3] = ay * o[c0 + 2] - az * o[c0 + 1]
+    o[c0 + 4] = az * o[c0] - ax * o[c0 + 2]
+    o[c0 + 5] = ax * o[c0 + 1] - ay * o[c0]
+    return wx, wy, wz
+
+
+@njit(cache=True)
 def reel_rows(ts, Y, p, out, acc, datt):
     """Fill out[row, reel, :] (columns REEL_COLUMNS) for every state row of Y.  Returns the index
     of the first row whose right-hand side failed, or -1."""
@@ -119,7 +149,6 @@ def reel_rows(ts, Y, p, out, acc, datt):
             uz = p[sb + SR_U + 2]
             eps = p[sb + SR_EPS]
             ld = p[rs + RS_LD]
-            lam = p[rs + RS_LAM]
             j0 = jscr + (g0 + k) * SJ_SIZE + SJ_J
             tens = -(p[j0] * ux + p[j0 + 1] * uy + p[j0 + 2] * uz)
             sp = ld * (1.0 + eps)
@@ -133,24 +162,11 @@ def reel_rows(ts, Y, p, out, acc, datt):
             o[6] = tens - p[rs + RS_JUMP]
             o[7] = tens * sp - 0.5 * rho * ld * sp * sp - 0.5 * ea * eps * eps * ld
             o[8] = 0.5 * rho * abs(ld) * sp * sp if int(p[rb + RL_EXIT]) == REEL_EXIT_CANISTER else 0.0
-            # material corrections (w = lambda D, D = 2 sqrt3 d, D' = 2 sqrt3 d')
-            wx = lam * 2.0 * SQ3 * q[3 + 3 * g]
-            wy = lam * 2.0 * SQ3 * q[4 + 3 * g]
-            wz = lam * 2.0 * SQ3 * q[5 + 3 * g]
+            wx, wy, wz = material_momentum(p, q, i, o, 9)
             ts_ = tscr + k * TS_SIZE + TS_A
-            ax = p[ts_]
-            ay = p[ts_ + 1]
-            az = p[ts_ + 2]
             vx = p[ts_ + 3]
             vy = p[ts_ + 4]
             vz = p[ts_ + 5]
-            hm = 0.5 * m
-            o[9] = hm * wx
-            o[10] = hm * wy
-            o[11] = hm * wz
-            o[12] = ay * o[11] - az * o[10]
-            o[13] = az * o[9] - ax * o[11]
-            o[14] = ax * o[10] - ay * o[9]
             ddx = 2.0 * SQ3 * qd[3 + 3 * g]
             ddy = 2.0 * SQ3 * qd[4 + 3 * g]
             ddz = 2.0 * SQ3 * qd[5 + 3 * g]
