@@ -68,13 +68,15 @@ class DeployingString:
 
 @dataclass
 class StringSolution:
-    """The end of a run: theta_rad the in-plane angle of the station -> end mass chord in the centre of
-    mass's orbital frame (positive along the orbital motion), offset_m the end mass's distance from the
-    station's radial line, and the run's statistics."""
+    """A run at the requested times t_s: theta_rad the in-plane angle of the station -> end mass chord in
+    the centre of mass's orbital frame (positive along the orbital motion), offset_m the end mass's
+    distance from the station's radial line; the nodes' positions at the last time in the turning frame
+    (x radial from the reference orbit's radius, y along the motion); the run's statistics."""
 
     t_s: np.ndarray
     theta_rad: np.ndarray
     offset_m: np.ndarray
+    positions_m: np.ndarray  # the nodes at the last requested time, end mass (row 0) to station (row grid)
     nfev: int
     njev: int
     nlu: int
@@ -191,14 +193,15 @@ def solve(problem: DeployingString, grid: int, *, t_eval=None, rtol: float = 1e-
                     jac_sparsity=_sparsity(n), dense_output=True)
     if not sol.success:
         raise RuntimeError(f"deploying_string.solve: Radau failed: {sol.message}")
-    th, off = [], []
+    th, off, pos = [], [], None
     for tk in te:
         yk = sol.y[:, -1] if tk == t_end else sol.sol(tk)
         pos, _ = unpack(yk)
+        pos = pos.copy()
         th_k, off_k = _end_quantities(pos, length(tk), n, p, m_sta)
         th.append(th_k)
         off.append(off_k)
-    return StringSolution(te, np.array(th), np.array(off), int(sol.nfev), int(sol.njev), int(sol.nlu),
+    return StringSolution(te, np.array(th), np.array(off), pos, int(sol.nfev), int(sol.njev), int(sol.nlu),
                           len(sol.t) - 1, n)
 
 
