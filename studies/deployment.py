@@ -36,7 +36,10 @@ F. Slow retrieval (adiabatic invariant): 10 km hauled in at l'/l = -0.02 Omega f
 G. Rod-count convergence of a deployment (nominal rod length halved) and the birth bounds varied
    (docs/deployment.md 8c): every halving's ratio of successive differences below 1/2 (at least first
    order) and the bounds' move within e(2h) + e(h). Control of both: the birth's cut against the
-   nominal rod length (deployment.birth_defect("cut-nominal")).
+   nominal rod length (deployment.birth_defect("cut-nominal")). The 125 m level against the continuum
+   string's limit (tetherlab/oracles/deploying_string.py, references/deploying_string/limit.json;
+   docs/deployment.md 8h) within the rods' tail bound plus the continuum's Richardson bound. Controls:
+   births without the transport velocity (transport_dropped_births), DEFECT_REEL_NO_LDOT.
 H. A spinning rigid hub with a wheel pays out from a reel off its centre of mass under three laws
    (studies/deployment_hub.py): total angular momentum (hub, wheel, stored tether and spool, rods)
    within 100 rtol |H(0)|, momentum and E + W_exit as above; what the attitude does in a figure.
@@ -1247,7 +1250,8 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "leaves A l unconserved and the retrieval 87 deg off the pendulum; the spool limits' three defects "
         "(the unlimited command or no brake in the balance, the limit's upper corner dropped) each fail the "
         "limits' gates they reach; the birth's cut against the nominal rod length fails part G's convergence "
-        "and birth-bound gates. The birth remap (B) has no control: it is Python (deployment.birth_state), "
+        "and birth-bound gates; births without the transport velocity and the strain rate without l' converge "
+        "to limits away from the continuum string's and fail part G's continuum gate. The birth remap (B) has no control: it is Python (deployment.birth_state), "
         "which no defect of the kernel reaches.",
         "",
         table(rows),
