@@ -18,8 +18,8 @@ the normalised coordinate xi = s/L(t): node j carries r and v of the material pa
 moving boundary adds the advection xi L'/L d/dxi to both time derivatives.  Segments between nodes
 carry the strain and the tension (a staggered grid, second order in 1/N); the end mass's node
 carries half a cell of line; the exit is the station's position, its material velocity from the
-exit condition with a one-sided difference.  scipy's Radau integrates the method of lines with a
-banded sparsity.  Nothing here imports the simulator's tether code: the scene's numbers are
+exit condition with a one-sided difference.  scipy's BDF or Radau integrates the method of lines with
+a banded sparsity (references/deploying_string/build_limit.py uses BDF: as accurate, fewer Jacobians).  Nothing here imports the simulator's tether code: the scene's numbers are
 arguments, and the only shared thing is the problem statement.
 """
 
