@@ -36,7 +36,10 @@ F. Slow retrieval (adiabatic invariant): 10 km hauled in at l'/l = -0.02 Omega f
 G. Rod-count convergence of a deployment (nominal rod length halved) and the birth bounds varied
    (docs/deployment.md 8c): every halving's ratio of successive differences below 1/2 (at least first
    order) and the bounds' move within e(2h) + e(h). Control of both: the birth's cut against the
-   nominal rod length (simulate_reel(..., remap_defect="cut-nominal")).
+   nominal rod length (simulate_reel(..., remap_defect="cut-nominal")). The 125 m level against the continuum
+   string's limit (tetherlab/oracles/deploying_string.py, references/deploying_string/limit.json;
+   docs/deployment.md 8h) within the rods' tail bound plus the continuum's Richardson bound. Controls:
+   births without the transport velocity (remap_defect="transport-dropped"), DEFECT_REEL_NO_LDOT.
 H. A spinning rigid hub with a wheel pays out from a reel off its centre of mass under three laws
    (studies/deployment_hub.py): total angular momentum (hub, wheel, stored tether and spool, rods)
    within 100 rtol |H(0)|, momentum and E + W_exit as above; what the attitude does in a figure.
@@ -921,14 +924,104 @@ def part_convergence():
     discretisation error of the level above plus its own (docs/deployment.md 8c). Gated: every
     halving's ratio of successive differences against 1/2 (at least first order: a birth's error
     must shrink faster than the births multiply) and the birth bounds' move against e(2h) + e(h);
-    the birth cut against the nominal rod length (remap_defect "cut-nominal") is the control of both."""
-    rows, (ratio, bounds) = _convergence_runs(control=False)
-    rows_cut, (ratio_cut, bounds_cut) = _convergence_runs(control=True)
+    the birth cut against the nominal rod length (remap_defect "cut-nominal") is the control of both.
+    Then the levels' Richardson limit against the continuum's (docs/deployment.md 8h), with the births
+    that drop the transport velocity and the strain rate without l' as its controls."""
+    rows, (ratio, bounds), levels = _convergence_runs(control=False)
+    rows_cut, (ratio_cut, bounds_cut), _ = _convergence_runs(control=True)
     gates = {"deployment_convergence_ratio_over_bound": ratio,
              "deployment_convergence_cut_nominal_negative_control": 1.0 / ratio_cut if ratio_cut > 0 else math.inf,
              "deployment_birth_bounds_over_budget": bounds,
              "deployment_birth_bounds_cut_nominal_negative_control": 1.0 / bounds_cut if bounds_cut > 0 else math.inf}
-    return rows + rows_cut, gates, None
+    rows_c, gates_c = continuum_comparison(levels)
+    gates.update(gates_c)
+    return rows + rows_cut + rows_c, gates, None
+
+
+# -- G: the rod levels' limit against the continuum (docs/deployment.md 8h) ------------------------
+CONTINUUM_LIMIT = ROOT / "references" / "deploying_string" / "limit.json"
+RICHARDSON_ORDER_CAP = 2.0  # neither the rods (TMED, second order) nor the string's grid is better
+
+
+def richardson(v: list) -> tuple[float, float, float]:
+    """(limit, error bound, observed order) of a quantity from its last three levels, the step halved
+    level by level: the order p = min(observed, 2), the limit v_n + d/(2^p - 1) with d = v_n - v_(n-1),
+    and its error bound |d|/(2^p - 1), the whole correction: for any order q >= p the limit
+    v_n + d/(2^q - 1) lies between v_n and the extrapolated value (docs/deployment.md 8h)."""
+    d_prev, d = v[-2] - v[-3], v[-1] - v[-2]
+    if d == 0.0:
+        return v[-1], 0.0, math.inf
+    order = math.log2(abs(d_prev / d)) if d_prev != 0.0 else -math.inf
+    p = min(order, RICHARDSON_ORDER_CAP)
+    if not (p > 0.0 and d_prev * d > 0.0):  # not converging monotonically: no limit to extrapolate to
+        return v[-1], math.inf, order
+    corr = d / (2.0**p - 1.0)
+    return v[-1] + corr, abs(corr), order
+
+
+def continuum_limit(path: Path = CONTINUUM_LIMIT) -> dict:
+    """The continuum's limits from references/deploying_string/limit.json (build_limit.py): for the
+    end angle and the end offset, (limit, budget, observed order), the budget the Richardson bound
+    plus twice the time integration's error (the difference from the run at a tenth of the tolerance
+    on the same grid)."""
+    data = json.loads(path.read_text())
+    lv = data["levels"]
+    chk = data["tolerance_check"]
+    same = [r for r in lv if r["grid"] == chk["grid"]]
+    if len(lv) < 3 or not same:
+        raise ValueError(f"{path}: expected at least three grid levels and the tolerance check's grid among them; "
+                         f"got grids {[r['grid'] for r in lv]} and the check at {chk['grid']}")
+    out = {"grids": [r["grid"] for r in lv], "steps": [r["steps"] for r in lv], "data": data}
+    for key in ("theta_rad", "offset_m"):
+        limit, err, order = richardson([r[key] for r in lv])
+        out[key] = (limit, err + 2.0 * abs(chk[key] - same[0][key]), order)
+    return out
+
+
+def rod_tail_bound(v: list) -> float:
+    """The distance of the finest rod level from the rods' limit, bounded from the halving before the
+    last: in the asymptotic range the TMED rods' differences shrink at least fourfold a halving (second
+    order), so |x(h) - x*| <= sum_k |d_(n-1)| 4^-(k+1) = |d_(n-1)|/12 over the halvings after the last
+    one; not less than the last difference's Richardson estimate |d_n|/3 (docs/deployment.md 8h)."""
+    return max(abs(v[-2] - v[-3]) / 12.0, abs(v[-1] - v[-2]) / 3.0)
+
+
+def continuum_comparison(levels: dict) -> tuple[list, dict]:
+    """Part G's finest level (from ``levels``: quantity -> the four levels' values) against the
+    continuum's Richardson limit, within the rods' tail bound plus the continuum's error bound
+    (docs/deployment.md 8h); the two controls' levels, each with its own tail bound, must lie outside."""
+    cont = continuum_limit()
+    controls = {}
+    controls["transport-drop"] = [convergence_quantities(simulate_reel(convergence_scene(h), remap_defect="transport-dropped"))
+                                  for h in CONV_RODS_M]  # fmt: skip
+    controls["no-ldot"] = [convergence_quantities(simulate_reel(convergence_scene(h), defect=DEFECT_REEL_NO_LDOT))
+                           for h in CONV_RODS_M]  # fmt: skip
+    rows, worst, ctrl_min = [], 0.0, {k: math.inf for k in controls}
+    for j, (name, key, unit) in enumerate((("end angle", "theta_rad", "rad"), ("end offset", "offset_m", "m"))):
+        c_lim, c_err, c_order = cont[key]
+        rows.append({"case": f"G continuum {name}: limit (grids {'/'.join(map(str, cont['grids']))}, "
+                             f"observed order {c_order:.2f})", "value": c_lim, "bound": c_err,
+                     "over bound": float("nan"), "unit": unit,
+                     "note": "references/deploying_string/limit.json; bound: Richardson plus 2x the time integration's"})  # fmt: skip
+        for label, v in [("", levels[name])] + [(f"control {c}: ", [q[j] for q in vals]) for c, vals in controls.items()]:
+            budget = rod_tail_bound(v) + c_err
+            diff = abs(v[-1] - c_lim)
+            over = diff / budget if budget > 0 else math.inf
+            if label:
+                ctrl = label[len("control "):-2]
+                ctrl_min[ctrl] = min(ctrl_min[ctrl], 1.0 / over if over > 0 else math.inf)
+            else:
+                worst = max(worst, over)
+            rows.append({"case": f"G {label}{name}: |{CONV_RODS_M[-1]:g} m rods - continuum limit|", "value": diff,
+                         "bound": budget, "over bound": over, "unit": unit,
+                         "note": f"levels {', '.join(f'{x:.9g}' for x in v)}; bound: rods' tail {rod_tail_bound(v):.2g} "
+                         f"+ continuum's {c_err:.2g}" + ("; must exceed it" if label else "")})  # fmt: skip
+    # a control fails the gate when either quantity is outside its budget: its gate value is the
+    # budget over the larger of its two misses (below 1: caught)
+    gates = {"deployment_continuum_limit_over_budget": worst,
+             "deployment_continuum_transport_drop_negative_control": ctrl_min["transport-drop"],
+             "deployment_continuum_no_ldot_negative_control": ctrl_min["no-ldot"]}
+    return rows, gates
 
 
 def _convergence_runs(control: bool):
@@ -977,7 +1070,7 @@ def _convergence_runs(control: bool):
                          "bound": budget, "over bound": over, "unit": unit,
                          "note": "against birth 1.5, retire 0.25; budget e(2h) + e(h)"
                          + ("; the control must exceed it somewhere" if control else "")})  # fmt: skip
-    return rows, (ratio, bounds)
+    return rows, (ratio, bounds), {name: v for name, (v, _o, _e) in out.items()}
 
 
 def figures(out: Path, free: dict, expo: dict | None, retr: dict | None) -> list[str]:
@@ -1137,7 +1230,8 @@ def write_report(out: Path, rows: list, gates: dict, figs: list, walls: dict) ->
         "leaves A l unconserved and the retrieval 87 deg off the pendulum; the spool limits' three defects "
         "(the unlimited command or no brake in the balance, the limit's upper corner dropped) each fail the "
         "limits' gates they reach; the birth's cut against the nominal rod length fails part G's convergence "
-        "and birth-bound gates. The birth remap (B) has no control: it is Python (deployment.birth_state), "
+        "and birth-bound gates; births without the transport velocity and the strain rate without l' converge "
+        "to limits away from the continuum string's and fail part G's continuum gate. The birth remap (B) has no control: it is Python (deployment.birth_state), "
         "which no defect of the kernel reaches.",
         "",
         table(rows),

@@ -100,5 +100,8 @@ def test_every_gate_has_a_probe_or_a_reason_to_have_none():
                 "deployment_hub_drum_negative_control",
                 # and the rod-count convergence (part G)
                 "deployment_convergence_ratio_over_bound", "deployment_convergence_cut_nominal_negative_control",
-                "deployment_birth_bounds_over_budget", "deployment_birth_bounds_cut_nominal_negative_control"}
+                "deployment_birth_bounds_over_budget", "deployment_birth_bounds_cut_nominal_negative_control",
+                # and the rod levels against the continuum's limit (part G)
+                "deployment_continuum_limit_over_budget", "deployment_continuum_transport_drop_negative_control",
+                "deployment_continuum_no_ldot_negative_control"}
     assert not (gates - probed - set(verify.TOOTHLESS) - credited), "gates neither probed nor explained"

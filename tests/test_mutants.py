@@ -86,6 +86,8 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
     pairs = (("deployment_rescaled_negative_control", "reel_rescaled", "deployment_momentum_over_bound"),
              ("deployment_no_ldot_negative_control", "reel_strain_rate_without_ldot",
               "deployment_exponential_tension_over_budget"),
+             ("deployment_continuum_no_ldot_negative_control", "reel_strain_rate_without_ldot",
+              "deployment_continuum_limit_over_budget"),
              ("deployment_frozen_negative_control", "reel_law_frozen", "deployment_retrieval_invariant"),
              ("deployment_hub_exit_torque_negative_control", "reel_hub_exit_torque_dropped",
               "deployment_hub_angular_momentum_over_bound"),
@@ -132,6 +134,18 @@ def test_the_birth_cut_defect_is_credited_only_through_part_g_control_gates():
             by_defect, by_gate, _ = verify.mutation_summary({}, GATES, {ctrl_gate: ctrl})
             assert (gate in by_defect.get("birth_cut_nominal", [])) == expect, (ctrl_gate, ctrl)
             assert ("birth_cut_nominal" in by_gate.get(ctrl_gate, [])) == expect, (ctrl_gate, ctrl)
+
+
+def test_the_transport_drop_birth_is_credited_only_through_its_continuum_control_gate():
+    # the births without the transport velocity are Python (studies/deployment.py
+    # simulate_reel's remap_defect "transport-dropped"), run by part G itself: a passing control credits the defect to the
+    # continuum gate, a failing or missing one credits nothing
+    ctrl_gate, gate = "deployment_continuum_transport_drop_negative_control", "deployment_continuum_limit_over_budget"
+    thr = GATES[ctrl_gate]["threshold"]
+    for ctrl, expect in ((0.5 * thr, True), (2.0 * thr, False), (None, False)):
+        by_defect, by_gate, _ = verify.mutation_summary({}, GATES, {ctrl_gate: ctrl})
+        assert (gate in by_defect.get("birth_transport_dropped", [])) == expect, ctrl
+        assert ("birth_transport_dropped" in by_gate.get(ctrl_gate, [])) == expect, ctrl
 
 
 def _reel_params(name):

@@ -119,6 +119,23 @@ def test_the_cut_nominal_defect_cuts_against_the_nominal_rod_only_when_asked():
     assert np.allclose(z[new.model.state.rod(0)], d / 6.0, rtol=1e-15, atol=0.0)
 
 
+def test_the_transport_dropped_defect_gives_the_new_rods_the_affine_field_only_when_asked():
+    # remap_defect "transport-dropped", the control of part G's continuum gate (docs/deployment.md
+    # 8h): the rates of the cut rod's parts are f dd and (1 - f) dd, the transport term
+    # (1 - f) (L'/l) d of 6.1 dropped; without the argument it is there (f = la/l = 1/6 here)
+    scene = _free_scene()
+    first = prepare(scene)
+    old = prepare(scene, reel_phase={"first": first, "rods": {"main": (3, 200.0)}})
+    new = prepare(scene, reel_phase={"first": first, "rods": {"main": (4, 200.0)}})
+    y = first.y0.copy()
+    d, dd = y[old.model.state.rod(0)].copy(), y[old.model.state.rod_rate(0)].copy()
+    f = 20.0 / 120.0
+    z = birth_state(old.model.state, new.model.state, y, 0, 120.0, 20.0, 2.0, remap_defect="transport-dropped")
+    assert np.allclose(z[new.model.state.rod_rate(0)], f * dd, rtol=1e-14, atol=0.0)
+    z = birth_state(old.model.state, new.model.state, y, 0, 120.0, 20.0, 2.0)
+    assert np.allclose(z[new.model.state.rod_rate(0)], f * dd + (1.0 - f) * (2.0 / 120.0) * d, rtol=1e-14, atol=0.0)
+
+
 def test_the_cut_nominal_defect_reaches_the_births_of_a_run():
     # simulate_reel threads remap_defect down to the birth: the free scene's first birth (t = 12.5 s,
     # first rod l = 75 m cut at la = 25 m, rods of 50 m) leaves the new first rod at la/(l - la) = 1/2
@@ -257,7 +274,7 @@ def test_restore_refuses_a_non_finite_state():
 
 
 def test_remap_defect_is_checked():
-    with pytest.raises(ValueError, match="remap_defect: expected None or one of 'linear-only', 'cut-nominal'; "
+    with pytest.raises(ValueError, match="remap_defect: expected None or one of 'linear-only', 'cut-nominal', 'transport-dropped'; "
                                          "got 'nonsense'"):
         simulate_reel(_free_scene(), remap_defect="nonsense")
 

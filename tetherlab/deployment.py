@@ -159,7 +159,10 @@ def reel_start(model, y0: np.ndarray) -> np.ndarray:
 #: length l - la instead of the first rod's length l, so the new joint sits at la/(l - la) of the
 #: chord (1/2 instead of 1/3 at a birth of 1.5 rods): the new rods are strained by a fixed fraction
 #: whatever the rod length, an error per birth that does not shrink with the rods (docs 8c).
-REMAP_DEFECTS = ("linear-only", "cut-nominal")
+#: "transport-dropped": the new rods get the affine field alone, the material's transport velocity
+#: (1 - s) w dropped (birth_state at speed 0): a wrong limit that part G's order and bounds gates
+#: pass and the continuum gate catches (docs 8h).
+REMAP_DEFECTS = ("linear-only", "cut-nominal", "transport-dropped")
 
 
 def check_remap_defect(remap_defect) -> None:
@@ -174,12 +177,15 @@ def birth_state(lay_old, lay_new, y: np.ndarray, g0: int, l_m: float, la_m: floa
     the reel into a new first rod (la, varying) and a full rod (l - la).  Every point of the line
     keeps its position and its material velocity v_A + s D' + (1 - s) w (docs/deployment.md 6.1),
     so mass, momentum, angular momentum and kinetic energy are those of before, to round-off.
-    ``remap_defect``: "cut-nominal" for the negative control (:data:`REMAP_DEFECTS`)."""
+    ``remap_defect``: "cut-nominal" or "transport-dropped" for the negative controls
+    (:data:`REMAP_DEFECTS`)."""
     d = y[lay_old.rod(g0)]
     dd = y[lay_old.rod_rate(g0)]
     f = la_m / l_m
     if remap_defect == "cut-nominal":  # negative control only (REMAP_DEFECTS)
         f = la_m / (l_m - la_m)
+    if remap_defect == "transport-dropped":  # negative control only (REMAP_DEFECTS)
+        speed_m_s = 0.0
     lam = speed_m_s / l_m
     d_a = f * d
     dd_a = f * dd + (1.0 - f) * lam * d

@@ -284,6 +284,11 @@ def mutation_summary(cells, gates: dict, study_values: dict):
          ("deployment_convergence_ratio_over_bound",)),
         ("deployment_birth_bounds_cut_nominal_negative_control", "birth_cut_nominal",
          ("deployment_birth_bounds_over_budget",)),
+        # (the births without the transport velocity are Python too: remap_defect "transport-dropped")
+        ("deployment_continuum_transport_drop_negative_control", "birth_transport_dropped",
+         ("deployment_continuum_limit_over_budget",)),
+        ("deployment_continuum_no_ldot_negative_control", "reel_strain_rate_without_ldot",
+         ("deployment_continuum_limit_over_budget",)),
         ("deployment_seds_canister_negative_control", "canister_as_drum",
          ("deployment_seds_reduced_over_budget", "deployment_seds_energy_over_bound")),
     ):  # fmt: skip

@@ -224,6 +224,10 @@ def _deployment_gates(outdir: Path) -> dict:
         "deployment_convergence_cut_nominal_negative_control": g.get("deployment_convergence_cut_nominal_negative_control"),
         "deployment_birth_bounds_over_budget": g.get("deployment_birth_bounds_over_budget"),
         "deployment_birth_bounds_cut_nominal_negative_control": g.get("deployment_birth_bounds_cut_nominal_negative_control"),
+        # part G: the rod levels against the continuum's limit (tetherlab/oracles/deploying_string.py, docs/deployment.md 8h)
+        "deployment_continuum_limit_over_budget": g.get("deployment_continuum_limit_over_budget"),
+        "deployment_continuum_transport_drop_negative_control": g.get("deployment_continuum_transport_drop_negative_control"),
+        "deployment_continuum_no_ldot_negative_control": g.get("deployment_continuum_no_ldot_negative_control"),
     }
 
 
