@@ -56,8 +56,12 @@ J. A SEDS-like deployment (studies/reel_laws.py seds_scene): 20 km from a canist
    against rods of 4 km; twice the difference from the run at rtol 1e-9). Control: a canister's
    exit jump taken as a drum's (DEFECT_CANISTER_AS_DRUM).
 K. A YES2-like two-stage deployment (studies/reel_yes2.py): the tension law in stages, l_c = 3.4 km
-   then 30 km (docs/deployment.md 10.6, 15); length, rate, tension, in-plane angle and the commanded
-   length in a figure. Its first stage held alone for 8 orbits: the last output's length against the
+   then 30 km from reaching 3.4 km (docs/deployment.md 10.7, 15); length, rate, tension, in-plane
+   angle and the commanded length in a figure. Gated (15.1): J = E + K_s + W_b + W_loss - Omega_0 H_z
+   across the switch and the births within the works' quadrature, the rtol 1e-9 twin and round-off
+   (control: a drum without its turns, DEFECT_DRUM_NO_TURNS), and the switch at 3.4 km within the
+   located stop's tolerance (10.7a; control: the switch on the first rod's length,
+   DEFECT_STAGE_FIRST_ROD). Its first stage held alone for 8 orbits: the last output's length against the
    law's rest length with the massive line, the drum and the strain (docs/deployment.md 11.4,
    studies/reel_hold.py), within the linear closed loop's settling from the state two orbits earlier
    plus the terms the rest length leaves out. Control: the law's 3 l_c read as 3 L (DEFECT_TENSION_3L).

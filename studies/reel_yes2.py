@@ -155,3 +155,26 @@ def yes2_switch(run, rtol: float = 1e-8) -> dict:
     err = abs(sw[0]["length_m"] - at)
     return {"at_m": at, "L_m": sw[0]["length_m"], "err_m": err, "tol_m": terms["total"], "ratio": err / terms["total"],
             "t_s": t_b, "terms": terms}  # fmt: skip
+
+
+def hold_profile(run) -> dict:
+    """t, L, v and the in-plane angle of a run (a phase's repeated first row dropped)."""
+    r = run.reel
+    dg = pd.concat([ph.diagnostics[["t_s", "main.theta_rad", "eccentricity"]] for ph in run.phases], ignore_index=True)
+    keep = ~dg["t_s"].duplicated().to_numpy()
+    return {"t": r["t_s"].to_numpy()[keep], "L": r["deployed_length_m"].to_numpy()[keep],
+            "v": r["speed_m_s"].to_numpy()[keep], "theta": dg["main.theta_rad"].to_numpy()[keep],
+            "ecc": dg["eccentricity"].to_numpy()[keep]}  # fmt: skip
+
+
+def hold_measure(run) -> dict:
+    """The held first stage against its derived equilibrium and the closed loop's settling from the
+    state at HOLD_FROM_ORBITS (docs/deployment.md 11.4, 15): studies/reel_hold.settling_measure."""
+    from studies.reel_hold import settling_measure
+
+    h = yes2_hold()
+    pr = hold_profile(run)
+    t0 = HOLD_FROM_ORBITS * 2.0 * math.pi / h.omega
+    m = settling_measure(pr, h, t0, rtol=1e-8, ecc_max=float(pr["ecc"][pr["t"] >= t0].max()))
+    m["profile"] = pr
+    return m
