@@ -59,8 +59,12 @@ J. A SEDS-like deployment (studies/reel_laws.py seds_scene): 20 km from a canist
    against rods of 4 km; twice the difference from the run at rtol 1e-9). Control: a canister's
    exit jump taken as a drum's (DEFECT_CANISTER_AS_DRUM).
 K. A YES2-like two-stage deployment (studies/reel_yes2.py): the tension law in stages, l_c = 3.4 km
-   then 30 km (docs/deployment.md 10.6, 15); length, rate, tension, in-plane angle and the commanded
-   length in a figure. Its first stage held alone for 8 orbits: the last output's length against the
+   then 30 km from reaching 3.4 km (docs/deployment.md 10.7, 15); length, rate, tension, in-plane
+   angle and the commanded length in a figure. Gated (15.1): J = E + K_s + W_b + W_loss - Omega_0 H_z
+   across the switch and the births within the works' quadrature, the rtol 1e-9 twin and round-off
+   (control: a drum without its turns, DEFECT_DRUM_NO_TURNS), and the switch at 3.4 km within the
+   located stop's tolerance (10.7a; control: the switch on the first rod's length,
+   DEFECT_STAGE_FIRST_ROD). Its first stage held alone for 8 orbits: the last output's length against the
    law's rest length with the massive line, the drum and the strain (docs/deployment.md 11.4,
    studies/reel_hold.py), within the linear closed loop's settling from the state two orbits earlier
    plus the terms the rest length leaves out. Control: the law's 3 l_c read as 3 L (DEFECT_TENSION_3L).
@@ -586,13 +590,15 @@ def part_seds():
 
 
 def part_yes2():
-    """K: the YES2-like two-stage deployment (shown), and its first stage held alone against the
-    law's rest length with the massive line (docs/deployment.md 11.4, 15) with its control, the
-    law's 3 l_c read as 3 L (DEFECT_TENSION_3L)."""
+    """K: the YES2-like two-stage deployment, its energy balance without the orbit's share across
+    the switch and the births and the switch's location (docs/deployment.md 15.1) with their
+    controls (a drum without its turns, DEFECT_DRUM_NO_TURNS; the switch on the first rod's length,
+    DEFECT_STAGE_FIRST_ROD), and its first stage held alone against the law's rest length with the
+    massive line (11.4) with its control, the law's 3 l_c read as 3 L (DEFECT_TENSION_3L)."""
     from studies import reel_yes2 as Y
-    from tetherlab.model.params import DEFECT_TENSION_3L
+    from tetherlab.model.params import DEFECT_DRUM_NO_TURNS, DEFECT_STAGE_FIRST_ROD, DEFECT_TENSION_3L
 
-    run = simulate_reel(Y.yes2_scene(), progress=False, raise_on_failure=False)
+    run = simulate_reel(Y.yes2_scene(count=Y.GATE_COUNT), progress=False, raise_on_failure=False)
     if not run.ok:
         raise RuntimeError(f"part K: the YES2-like run failed: {run.message}")
     prof = Y.yes2_profile(run)
@@ -600,6 +606,39 @@ def part_yes2():
     rows = [{"case": "K YES2-like: end of the run", "value": float(prof["t"][-1] / 60.0), "unit": "min",
              "note": f"{prof['L'][-1] / 1e3:.1f} km out ({run.stopped_by or 'end of run'}), speed {prof['v'][-1]:.1f} m/s, "
                      f"angle {math.degrees(prof['theta'][-1]):.1f} deg; {births} births"}]  # fmt: skip
+    # 15.1: J across the switch and the births, against the works' quadrature (twice its Richardson
+    # estimate), the integrator (twice the largest difference from the rtol 1e-9 twin) and round-off
+    fine = simulate_reel(Y.yes2_scene(count=Y.GATE_COUNT, rtol=1e-9), progress=False, raise_on_failure=False)
+    en, en_fine = Y.yes2_energy(run), Y.yes2_energy(fine)
+    twin = np.abs(en["drift"] - np.interp(en["t"], en_fine["t"], en_fine["drift"]))
+    e_bound = 2.0 * en["quadrature"] + 2.0 * float(twin.max()) + 100.0 * EPS * en["scale"]
+    e_err = float(np.abs(en["drift"]).max())
+    sw = Y.yes2_switch(run)
+    turns = simulate_reel(Y.yes2_scene(count=Y.GATE_COUNT), progress=False, raise_on_failure=False,
+                          defect=DEFECT_DRUM_NO_TURNS)  # fmt: skip
+    if turns.ok and len(turns.reel):
+        ce = Y.yes2_energy(turns)
+        c_energy = float(np.abs(ce["drift"]).max()) / (2.0 * ce["quadrature"] + 100.0 * EPS * ce["scale"])
+    else:
+        c_energy = 0.0  # a failed control shows no teeth: its gate fails
+    # the switch on the first rod's length: run one orbit, past the 37 min of the correct switch
+    wrong = simulate_reel(Y.yes2_scene(orbits=1.0), progress=False, raise_on_failure=False,
+                          defect=DEFECT_STAGE_FIRST_ROD)  # fmt: skip
+    c_switch = Y.yes2_switch(wrong)["ratio"] if wrong.ok else 0.0
+    rows += [
+        {"case": "K YES2-like: max |E + K_s + W_b + W_loss - Omega_0 H_z - (0)| across the switch and births",
+         "value": e_err, "bound": e_bound, "over bound": e_err / e_bound, "unit": "J",
+         "note": f"quadrature 2 x {en['quadrature']:.3g}, twin 2 x {float(twin.max()):.3g}, round-off "
+                 f"{100.0 * EPS * en['scale']:.3g} J; E + K_s + W_b + W_loss alone drifts {en['orbit_drift']:.3g} J; "
+                 f"brake {float(run.reel['brake_work_J'].iloc[-1]):.4g} J, exit loss {float(run.reel['exit_loss_J'].iloc[-1]):.3g} J"},
+        {"case": "K YES2-like: |L(t_s) - at_length| of the located switch", "value": sw["err_m"], "bound": sw["tol_m"],
+         "over bound": sw["ratio"], "unit": "m",
+         "note": f"switch at t = {sw['t_s']:.6g} s, L = {sw['L_m']:.12g} m (at_length {sw['at_m']:g} m)"},
+        {"case": "control drum without its turns: energy over its bound", "value": c_energy, "bound": 1.0,
+         "over bound": c_energy, "unit": "1", "note": "must exceed 1"},
+        {"case": "control switch on the first rod's length: switch error over tolerance", "value": c_switch, "bound": 1.0,
+         "over bound": c_switch, "unit": "1", "note": "must exceed 1 (infinite: no switch within one orbit)"},
+    ]  # fmt: skip
     hold = simulate_reel(Y.yes2_hold_scene(), progress=False, raise_on_failure=False)
     if not hold.ok:
         raise RuntimeError(f"part K: the held first stage failed: {hold.message}")
@@ -617,7 +656,10 @@ def part_yes2():
          "note": "must exceed 1"},
     ]  # fmt: skip
     gates = {"deployment_yes2_hold_over_budget": m["ratio"],
-             "deployment_yes2_hold_3l_negative_control": 1.0 / c_ratio if c_ratio > 0 else math.inf}
+             "deployment_yes2_hold_3l_negative_control": 1.0 / c_ratio if c_ratio > 0 else math.inf,
+             "deployment_yes2_energy_over_bound": e_err / e_bound, "deployment_yes2_switch_over_tolerance": sw["ratio"],
+             "deployment_yes2_turns_negative_control": 1.0 / c_energy if c_energy > 0 else math.inf,
+             "deployment_yes2_first_rod_negative_control": 1.0 / c_switch if c_switch > 0 else math.inf}
     prof["hold"] = m
     return rows, gates, prof
 

@@ -42,14 +42,15 @@ SOURCES = {
 # hub: the four first rods reach 15 m (1.5 x 10 m) together at 6.0 s (docs/deployment.md 9.5's run);
 # the staged laws must keep every stage within the run (deployment.check_law): the tension-law
 # retrieval's last stage starts at 3.75 orbits (its 4 retirements, docs/deployment.md 14, and 5
-# stage switches: 10 phases), the YES2-like's second stage at 2 orbits (2 births and a retirement
-# by then, measured: 13 s of wall time, so marked slow).
+# stage switches: 10 phases); the YES2-like's second stage starts on reaching 3.4 km at 2232 s (a
+# located event, in the changes): half an orbit (2704 s) has a birth, the switch and a birth,
+# 4 phases (measured: a few seconds of wall time; marked slow as the whole run was).
 SHORT = {
     "reel-exponential": ("30000 s", 1, 2),
     "reel-seds-like": ("10 min", 0, 1),
     "reel-retrieval": ("1000 s", 1, 2),
     "reel-retrieval-tension": ("3.8 orbits", 4, 10),
-    "reel-yes2-like": ("2.05 orbits", 3, 5),
+    "reel-yes2-like": ("0.5 orbits", 3, 4),
     # the hub: t2's birth at 6.0002191886 s ends the first phase; the three others' rods are then
     # below the bound by more than the event's bracket, so a phase of 9e-12 s ends at theirs, all
     # three taken together (docs/deployment.md 17.1)
@@ -129,10 +130,12 @@ def test_cli_runs_each_reel_scene_and_writes_its_phases(tmp_path, stem, capsys):
 
 
 def test_a_shortened_staged_scene_is_refused_naming_the_stage(tmp_path, capsys):
-    f = _short_copy(tmp_path, "reel-yes2-like", "10 min")
+    # the tension-law retrieval's first stage starts at 0.75 orbit (4371.39 s); a stage started by a
+    # length (the YES2-like's) is not refused: it is a located event, switched if it is reached
+    f = _short_copy(tmp_path, "reel-retrieval-tension", "10 min")
     assert main(["run", str(f), "--out", str(tmp_path / "run")]) == 2
     err = capsys.readouterr().err
-    assert "tethers.main.reel.stages[0].start" in err and "before 600 s" in err and "10813.6 s" in err
+    assert "tethers.main.reel.stages[0].start" in err and "before 600 s" in err and "4371.39 s" in err
 
 
 def test_cli_resumes_a_shipped_reel_scene_across_a_birth(tmp_path, monkeypatch, capsys):

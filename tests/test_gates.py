@@ -90,6 +90,9 @@ def test_every_gate_has_a_probe_or_a_reason_to_have_none():
                 "deployment_retrieval_pendulum_over_budget", "deployment_retrieval_pendulum_frozen_negative_control",
                 # and the YES2-like hold (part K)
                 "deployment_yes2_hold_over_budget", "deployment_yes2_hold_3l_negative_control",
+                # and the YES2-like two-stage run: its energy and its switch (part K)
+                "deployment_yes2_energy_over_bound", "deployment_yes2_switch_over_tolerance",
+                "deployment_yes2_turns_negative_control", "deployment_yes2_first_rod_negative_control",
                 # and the staged retrieval's settling (part L)
                 "deployment_retrieval_settle_over_budget", "deployment_retrieval_settle_3l_negative_control",
                 # and the SEDS-like run against the reduced model and its energy (part J)

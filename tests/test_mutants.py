@@ -105,6 +105,8 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
               "deployment_spoke_angular_momentum_over_bound"),
              ("deployment_spoke_one_stored_negative_control", "reel_one_stored", "deployment_spoke_momentum_over_bound"),
              ("deployment_yes2_hold_3l_negative_control", "tension_3l", "deployment_yes2_hold_over_budget"),
+             ("deployment_yes2_turns_negative_control", "drum_no_turns", "deployment_yes2_energy_over_bound"),
+             ("deployment_yes2_first_rod_negative_control", "stage_first_rod", "deployment_yes2_switch_over_tolerance"),
              ("deployment_retrieval_settle_3l_negative_control", "tension_3l", "deployment_retrieval_settle_over_budget"),
              ("deployment_seds_canister_negative_control", "canister_as_drum", "deployment_seds_reduced_over_budget"),
              ("deployment_hub_drum_negative_control", "hub_drum_no_spin", "deployment_hub_drum_angular_momentum_over_bound"))
@@ -116,7 +118,8 @@ def test_the_reel_defects_are_credited_only_through_their_control_gates():
             "spool_no_speed_brake": "SPOOL_NO_SPEED_BRAKE", "spool_torque_one_sided": "SPOOL_TORQUE_ONE_SIDED",
             "reel_hub_ring_full": "REEL_RING_FULL", "wheels_gyro_dropped": "WHEELS_NO_GYRO",
             "reel_one_stored": "REEL_ONE_STORED", "tension_3l": "TENSION_3L", "canister_as_drum": "CANISTER_AS_DRUM",
-            "hub_drum_no_spin": "HUB_DRUM_NO_SPIN"}[defect])
+            "hub_drum_no_spin": "HUB_DRUM_NO_SPIN", "drum_no_turns": "DRUM_NO_TURNS",
+            "stage_first_rod": "STAGE_FIRST_ROD"}[defect])
         thr = GATES[ctrl_gate]["threshold"]
         for ctrl, expect in ((0.5 * thr, True), (2.0 * thr, False), (None, False)):
             by_defect, _by_gate, _ = verify.mutation_summary({}, GATES, {ctrl_gate: ctrl})

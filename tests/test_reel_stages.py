@@ -32,11 +32,11 @@ BAD_STAGES = [
     ("2 h", KEY),  # not a list
     ([], KEY),  # empty
     ([{"start": "1 h"}], f"{KEY}[0].commanded_length"),  # missing
-    ([{"commanded_length": "1 km"}], f"{KEY}[0].start"),  # missing
+    ([{"commanded_length": "1 km"}], f"{KEY}[0]"),  # neither start nor at_length
     ([{"start": "0 s", "commanded_length": "1 km"}], f"{KEY}[0].start"),  # not after t = 0
     ([{"start": "2 h", "commanded_length": "1 km"}, {"start": "1 h", "commanded_length": "2 km"}], f"{KEY}[1].start"),
     ([{"start": "1 h", "commanded_length": "-1 km"}], f"{KEY}[0].commanded_length"),
-    ([{"start": "1 h", "commanded_length": "1 km", "k1": 5}], f"{KEY}[0].k1"),  # unknown key
+    ([{"start": "1 h", "commanded_length": "1 km", "torque": "1 N m"}], f"{KEY}[0].torque"),  # unknown key
 ]
 
 
@@ -69,8 +69,10 @@ def test_stages_round_trip_and_their_lengths():
     scene = _STUDY.retrieval_scene(controlled=True)
     again = Scene.from_dict(scene.to_dict())
     sp, sp2 = scene.tethers[0].reel.spool, again.tethers[0].reel.spool
-    assert np.allclose(sp2.stages, sp.stages, rtol=1e-12, atol=0.0) and sp2.commanded_length_m == sp.commanded_length_m
-    first = sp.stages[0][0]
+    times = [(s.start_s, s.commanded_length_m) for s in sp.stages]
+    assert np.allclose([(s.start_s, s.commanded_length_m) for s in sp2.stages], times, rtol=1e-12, atol=0.0)
+    assert sp2.commanded_length_m == sp.commanded_length_m and all(s.at_length_m is None for s in sp2.stages)
+    first = sp.stages[0].start_s
     assert stage_length(sp, 0.0) == 2500.0  # the scene's commanded_length holds before the first stage
     assert stage_length(sp, first * (1.0 - 1e-6)) == 2500.0
     assert stage_length(sp, first) == 1250.0  # a stage holds from its start
@@ -89,7 +91,7 @@ def test_staged_command_is_the_law_with_the_stage_length(staged):
     om, mred = _STUDY.omega(), _STUDY.reduced_mass()
     sp = _STUDY.retrieval_scene(controlled=True).tethers[0].reel.spool
     r = staged.reel
-    starts = {s for s, _ in sp.stages}
+    starts = {s.start_s for s in sp.stages}
     worst = 0.0
     for t, L, v, cmd in zip(r["t_s"], r["deployed_length_m"], r["speed_m_s"], r["command_N"]):
         if any(abs(t - s) < 1e-6 for s in starts):
@@ -167,14 +169,16 @@ def test_pendulum_sensitivity_predicts_a_perturbed_pendulum():
 
 @pytest.mark.slow
 def test_yes2_like_runs_both_stages():
-    """The YES2-like scene (studies/reel_yes2.py, ~9 s): the first stage holds below the line's
-    end, the second starts at its scheduled time and pays the rest of the 31.7 km line out; the
-    run stops with the located event reel.main.spent and keeps its outputs (docs/deployment.md 15)."""
+    """The YES2-like scene (studies/reel_yes2.py, ~10 s): the first stage pays out to 3.4 km, where
+    the second takes over (a located event: the only stage switch, at that length) and pays the
+    rest of the 31.7 km line out; the run stops with the located event reel.main.spent and keeps
+    its outputs (docs/deployment.md 15)."""
     yes2 = import_study("reel_yes2")
     run = simulate_reel(yes2.yes2_scene(), progress=False, raise_on_failure=False)
     assert run.stopped_by == "reel.main.spent", run.message
     pr = yes2.yes2_profile(run)
-    start2 = yes2.yes2_scene(count=3).tethers[0].reel.spool.stages[0][0]
-    first = pr["t"] < start2
-    assert pr["L"][first].max() < 10e3  # the first stage never runs away towards the line's end
-    assert pr["t"][-1] > start2 and abs(pr["L"][-1] - yes2.YES2["line"]) < 1.0
+    sw = [c for c in run.changes if c["change"] == "stage"]
+    assert len(sw) == 1 and abs(sw[0]["length_m"] - yes2.YES2["lc1"]) < 1e-6, sw  # 15.1 gates it to ~1e-9 m
+    first = pr["t"] < sw[0]["t_s"]
+    assert pr["L"][first].max() <= yes2.YES2["lc1"] + 1e-6  # the first stage ends on reaching its length
+    assert pr["t"][-1] > sw[0]["t_s"] and abs(pr["L"][-1] - yes2.YES2["line"]) < 1.0

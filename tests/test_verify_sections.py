@@ -124,7 +124,7 @@ def test_deployment_section_measures_every_deployment_gate(tmp_path):
     sections, values, failures = verify.run_studies(tmp_path, ["deployment"])
     assert failures == [] and [s[0] for s in sections] == ["deployment"]
     wanted = {g for g in gates if g.startswith("deployment_")}
-    assert len(wanted) == 57 and wanted <= set(values)
+    assert len(wanted) == 61 and wanted <= set(values)
     for g in wanted:
         assert values[g] is not None and values[g] <= gates[g]["threshold"], (g, values[g])
         assert verify.gate_section(g) == "study-deployment"

@@ -61,8 +61,8 @@ def check_law(scene, duration_s: float) -> None:
         path = f"tethers.{t.name}.reel"
         line = t.length_m + r.stored_length_m
         if r.spool is not None:  # its length is state: the kernel stops a run that spends the line
-            for j, (start, _) in enumerate(r.spool.stages):
-                if not start < duration_s:
+            for j, start in enumerate(s.start_s for s in r.spool.stages):
+                if start is not None and not start < duration_s:
                     raise SceneError(f"{path}.stages[{j}].start", f"a start within the run (before {duration_s:.6g} s)",
                                      f"{start:.6g} s")  # fmt: skip
             continue
@@ -336,26 +336,74 @@ def _kernel_index(prep, name: str) -> int:
 
 
 def stage_length(spool, t_s: float) -> float:
-    """The commanded length of a tension law at t_s: the last stage started at or before it (a
-    stage that starts at t_s holds from there: a phase starting at a stage's start runs under it)."""
-    lc = spool.commanded_length_m
-    for start, length in spool.stages:
-        if start <= t_s * (1.0 + 1e-12) + 1e-9:
-            lc = length
-    return lc
+    """The commanded length of a tension law at t_s under its time stages: the last stage started at
+    or before it (a stage that starts at t_s holds from there: a phase starting at a stage's start
+    runs under it).  A stage started by a length is located in the run (:func:`active_stages`)."""
+    return spool.commanded_length_m if (j := _time_stage(spool, -1, t_s)) < 0 else spool.stages[j].commanded_length_m
 
 
-def set_stage(prep, tethers, t_s: float) -> None:
-    """Write every staged tension law's commanded length at t_s into the model's parameters: the
-    command is constant over a phase, and a stage's start ends one (docs/deployment.md 10.6)."""
-    reels = p_view(prep.model.p).reels
+def _time_stage(spool, j: int, t_s: float) -> int:
+    """Stage j (-1: the law's own) advanced over the time stages that follow it and have started at
+    t_s (the window of :func:`next_change`: a start within 1e-12 t + 1e-9 s of t_s is at it)."""
+    while j + 1 < len(spool.stages):
+        start = spool.stages[j + 1].start_s
+        if start is None or not start <= t_s * (1.0 + 1e-12) + 1e-9:
+            break
+        j += 1
+    return j
+
+
+def active_stages(tethers, changes: list, t_s: float) -> dict:
+    """The stage each staged tension law runs under from t_s on: {tether: j}, -1 the law's own.
+    A stage started by a length is a located event of the run, recorded in ``changes`` (change
+    "stage"); those after it are started by lengths too (scene/reels.py), so the time stages are
+    all before it and known from t_s."""
+    out = {}
     for t in tethers:
         if t.reel.spool is None or not t.reel.spool.stages:
             continue
+        j = max((c["stage"] for c in changes if c["change"] == "stage" and c["reel"] == t.name), default=-1)
+        out[t.name] = _time_stage(t.reel.spool, j, t_s)
+    return out
+
+
+def located_length_tolerance(speed_m_s: float, t_s: float, phase_s: float, length_m: float, n_state: int,
+                             rtol: float, atol: float) -> dict:
+    """How far from its length a switch located by the event ``reel.<tether>.stage`` may stop
+    (docs/deployment.md 10.7a), in metres, by term: ``bracket``, the event's time bracket
+    (integrators/common.py event_time_tolerance, the step at most the phase) times |L'|;
+    ``roundoff``, 4 eps L; ``integrator``, the integration to the bracket's end against the
+    crossing step's polynomial the bracket was found on, both within one step's accepted error:
+    an RMS of the n_state scaled errors at most 1 lets one component carry sqrt(n_state) of it,
+    sqrt(n) (atol + rtol L); and ``total``."""
+    from .integrators.common import EPS, event_time_tolerance
+
+    out = {"bracket": abs(speed_m_s) * event_time_tolerance(t_s, phase_s), "roundoff": 4.0 * EPS * abs(length_m),
+           "integrator": math.sqrt(n_state) * (atol + rtol * abs(length_m))}
+    out["total"] = out["bracket"] + out["roundoff"] + out["integrator"]
+    return out
+
+
+def set_stage(prep, tethers, active: dict) -> None:
+    """Write every staged tension law's parameters of its stage (``active``, :func:`active_stages`)
+    into the model's: the commanded length, gains and limits are constant over a phase, and a
+    switch ends one (docs/deployment.md 10.6, 10.7); and the length whose reaching starts the next
+    stage, the event ``reel.<tether>.stage`` (0: no such stage next)."""
+    from .scene.reels import stage_parameters
+
+    reels = p_view(prep.model.p).reels
+    for t in tethers:
+        if t.name not in active:
+            continue
+        sp, j = t.reel.spool, active[t.name]
+        values = stage_parameters(sp, j)
+        nxt = sp.stages[j + 1].at_length_m if j + 1 < len(sp.stages) else None
         k = _kernel_index(prep, t.name)
         for i in range(len(reels)):
             if int(reels[i].tether) == k:
-                reels[i].lc_m = stage_length(t.reel.spool, t_s)
+                for name, v in values.items():
+                    setattr(reels[i], name, v)
+                reels[i].stage_m = nxt if nxt is not None else 0.0
 
 
 def _deployed(tether, prep, y_end, t_s: float) -> float:
@@ -366,12 +414,13 @@ def _deployed(tether, prep, y_end, t_s: float) -> float:
 
 
 def _spool_change(stopped_by, tethers):
-    """(tether, 'birth' | 'retire') when a spool law's located event ended the phase, else None."""
+    """(tether, 'birth' | 'retire' | 'stage') when a spool law's located event ended the phase,
+    else None."""
     if not stopped_by or not stopped_by.startswith("reel."):
         return None
     name, kind = stopped_by[len("reel."):].rsplit(".", 1)
     for t in tethers:
-        if t.name == name and kind in ("birth", "retire"):
+        if t.name == name and kind in ("birth", "retire", "stage"):
             return t, kind
     return None
 
@@ -574,7 +623,8 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
     bar = _ProgressBar(t_end, enabled=progress) if not callable(progress) else None
     update = bar.update if bar is not None else progress
     knots = sorted({float(x) for t in tethers if t.reel.law == "table" for x in t.reel.times_s[1:-1]}
-                   | {float(s[0]) for t in tethers if t.reel.spool is not None for s in t.reel.spool.stages})
+                   | {float(s.start_s) for t in tethers if t.reel.spool is not None for s in t.reel.spool.stages
+                      if s.start_s is not None})  # fmt: skip
     loop = sink.resume or {"phase": 0, "t_a": 0.0, "y": prep0.y0, "rods": {t.name: t.rods for t in tethers},
                            "model_rods": None, "changes": []}  # fmt: skip
     # the model of the phase: the first one's, or rebuilt after the last birth or retirement
@@ -601,7 +651,7 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
             times = np.concatenate([[t_a], inside, [t_b]])
             prep = replace(prep, y0=y, t_out=times, t0_s=t_a)
             p_view(prep.model.p).defect = defect  # 0 in every user run
-            set_stage(prep, tethers, t_a)
+            set_stage(prep, tethers, active_stages(tethers, changes, t_a))
             sink.start_phase(loop)
             res, p = sink.run_phase(loop, prep, prep.model.fresh_params(), update)
             stats, msg = run_outcome(prep, res, p, 0.0)
@@ -609,6 +659,16 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
             reel_parts, inv = phase_rows(tethers, ph, state, res.t, out, d)
             sink.end_phase(loop, prep, res, stats, msg, p, d, reel_parts, inv)
             spool_change = _spool_change(stats.get("stopped_by"), tethers) if res.status == 0 else None
+            if spool_change is not None and spool_change[1] == "stage":
+                # the deployed length reached the next stage's: located, the same model goes on from
+                # there under that stage (docs/deployment.md 10.7); a bound reached at the same
+                # instant is the next phase's first event (it starts on the bound's old side)
+                t_b, t = float(res.t[-1]), spool_change[0]
+                L = float(res.y_end[prep.model.state.spool_of(_kernel_index(prep, t.name))][0])
+                j = active_stages(tethers, changes, t_a)[t.name] + 1
+                changes = changes + [{"t_s": t_b, "reel": t.name, "change": "stage", "stage": j, "length_m": L}]
+                loop = dict(loop, phase=ph + 1, t_a=t_b, y=res.y_end, changes=changes)
+                continue
             if spool_change is not None:  # a spool law's first rod reached a bound: located, the phase ends there
                 t_b = float(res.t[-1])
                 nxt = (t_b, spool_change[1], spool_change[0])

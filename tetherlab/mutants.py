@@ -486,6 +486,27 @@ MUTANTS = {
             mutate=_flag(L.DEFECT_TENSION_3L),
             path="reel",
         ),
+        # -- run by studies/deployment.py part K beside the YES2-like two-stage run, credited from its control gates
+        Mutant(
+            "drum_no_turns",
+            "a drum's spool mass without its turns: m_s = J/R^2 in place of J/R^2 + rho (line - L) (the kinetic "
+            "energy the leaving turns carry through the exit, (1/2) rho L'^3, dropped from the spool's balance)",
+            "tether/reel_spool.py spool_forces (p[H_MUTANT] = DEFECT_DRUM_NO_TURNS)",
+            "docs/deployment.md 10.1 and 10.3 (the spool's balance with m_s' = -rho L'), 15.1",
+            ("deployment_yes2_energy_over_bound", "deployment_yes2_turns_negative_control"),
+            mutate=_flag(L.DEFECT_DRUM_NO_TURNS),
+            path="reel",
+        ),
+        Mutant(
+            "stage_first_rod",
+            "a tension law's stage switched on its first rod's length l = L - (n - 1) l_rod instead of the "
+            "deployed length L",
+            "kernel/events.py event_values (p[H_MUTANT] = DEFECT_STAGE_FIRST_ROD)",
+            "docs/deployment.md 10.7 (the event g = L - at_length)",
+            ("deployment_yes2_switch_over_tolerance", "deployment_yes2_first_rod_negative_control"),
+            mutate=_flag(L.DEFECT_STAGE_FIRST_ROD),
+            path="reel",
+        ),
         # -- run by studies/deployment.py part J beside the SEDS-like deployment, credited from its control gate
         Mutant(
             "canister_as_drum",

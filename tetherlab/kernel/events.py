@@ -12,10 +12,13 @@ so no step ever straddles a kink.  Components, in this order (see :func:`event_c
 * one per rod of every inextensible tether (terminal): its tension multiplier lambda
   (tether/inextensible.py), from one evaluation of the right-hand side at (t, y).  The model
   holds only while it is positive: the run stops where a rod would go slack;
-* three per reel under a spool law (terminal): its first rod's length at the birth bound and at
+* four per reel under a spool law (terminal): its first rod's length at the birth bound and at
   the retirement bound (``reel.<tether>.birth``, ``reel.<tether>.retire``: the phase of the
-  deployment ends there, tetherlab/deployment.py), and the whole line paid out
-  (``reel.<tether>.spent``: the run ends there, the end of the deployment);
+  deployment ends there, tetherlab/deployment.py), the whole line paid out
+  (``reel.<tether>.spent``: the run ends there, the end of the deployment), and the deployed
+  length at the next stage's ``at_length`` (``reel.<tether>.stage``: the phase ends there and the
+  next one runs under that stage, docs/deployment.md 10.7; a constant 1 when no such stage is
+  pending, which never changes side);
 * with the Cowell formulation (header H_EV_WHEELS), per wheel with a ``max_torque`` the torque
   limit max_torque - |command| and per wheel with a ``max_speed`` the speed cut-off
   (bodies/wheels.py::limit_events): negative while the limit acts, so saturation entered and left
@@ -35,6 +38,8 @@ from ..bodies.wheels import limit_events
 from ..tether.rod import strain
 from ..tether.solve import system_accelerations
 from .layout import (
+    DEFECT_STAGE_FIRST_ROD,
+    H_MUTANT,
     H_EV_WHEELS,
     H_NBODY,
     H_NWHEEL,
@@ -60,6 +65,7 @@ from .layout import (
     RL_LBIRTH,
     RL_LINE,
     RL_LRETIRE,
+    RL_LSTAGE,
     RL_SIZE,
     RL_SOFF,
     H_OFF_TETH,
@@ -145,7 +151,11 @@ def event_values(t, y, g_ptr, p):
         g_ptr[k] = l - p[rb + RL_LBIRTH]
         g_ptr[k + 1] = l - p[rb + RL_LRETIRE]
         g_ptr[k + 2] = p[rb + RL_LINE] - y[2 * h + so]
-        k += 3
+        stage_l = y[2 * h + so]
+        if int(p[H_MUTANT]) == DEFECT_STAGE_FIRST_ROD:  # negative control of the stage's location
+            stage_l = l
+        g_ptr[k + 3] = stage_l - p[rb + RL_LSTAGE] if p[rb + RL_LSTAGE] > 0.0 else 1.0
+        k += 4
     if p[H_EV_WHEELS] != 0.0:
         nw = int(p[H_NWHEEL])
         wscr = int(p[H_OFF_BSCR]) + int(p[H_NBODY]) * BS_SIZE + int(p[H_NTETH]) * TS_SIZE
@@ -187,8 +197,8 @@ def event_components(model, stop_radius_m: float = 0.0, wheel_limits: bool = Fal
                 terminal.append(True)
     for k in model.state.spools:  # terminal: a birth or retirement ends the phase (deployment.py)
         n = model.tethers[k].name
-        names.extend([f"reel.{n}.birth", f"reel.{n}.retire", f"reel.{n}.spent"])
-        terminal.extend([True, True, True])
+        names.extend([f"reel.{n}.birth", f"reel.{n}.retire", f"reel.{n}.spent", f"reel.{n}.stage"])
+        terminal.extend([True, True, True, True])
     if wheel_limits:
         for b in model.bodies:  # kernel body order, wheels in file order: the wheel table's order
             rig = getattr(b, "rigid", None)

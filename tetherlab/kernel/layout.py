@@ -48,6 +48,8 @@ DEFECT_REEL_RING_FULL = 43        # a reel on a rigid body whose stored ring kee
 DEFECT_REEL_ONE_STORED = 44       # a body with several reels whose mass counts only the last reel's stored tether (tether/reel.py)
 DEFECT_CANISTER_AS_DRUM = 52      # a canister's exit jump taken as a drum's, rho L'^2 eps in place of rho L'^2 (1 + eps) (tether/reel_spool.py)
 DEFECT_HUB_DRUM_NO_SPIN = 50      # a drum under a spool law on a rigid hub without its own spin J L'/R in the hub's balance nor the hub's alpha in the spool's (tether/reel_hub.py, tether/reel_spool.py)
+DEFECT_STAGE_FIRST_ROD = 61       # a tension law's stage switched on its first rod's length instead of the deployed length (kernel/events.py)
+DEFECT_DRUM_NO_TURNS = 62         # a drum's spool mass without its turns: J/R^2 in place of J/R^2 + rho (line - L) (tether/reel_spool.py)
 MUT_UNROTATED_ATTACHMENT = DEFECT_UNROTATED_ATTACHMENT
 MUT_NO_CENTRIPETAL = DEFECT_NO_CENTRIPETAL
 

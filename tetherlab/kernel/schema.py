@@ -197,6 +197,8 @@ REEL = Record("reel", "RL_", 41, (
     _f("max_speed_m_s", "RL_VMAX", unit="m/s", doc="spool laws: the speed above which the regulating brake engages"),
     _f("speed_gain_N_s_m", "RL_VGAIN", unit="N s/m", doc="spool laws: the regulating brake's force per m/s beyond it"),
     _f("speed_width_m_s", "RL_VW", unit="m/s", doc="spool laws: the width of the speed limit's smooth corner (0: none)"),
+    _f("stage_m", "RL_LSTAGE", unit="m",
+       doc="tension law: the deployed length whose reaching starts the next stage (a located event; 0: none pending)"),
 ))
 
 EFFECT = Record("effect", "ET_", 4, (

@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -235,6 +235,24 @@ class Reel:
     birth: str = "straight"  # REEL_BIRTHS
 
 
+class SpoolStage(NamedTuple):
+    """A later stage of a tension law (docs/deployment.md 10.6, 10.7): it takes over at a time
+    (``start_s``) or on reaching a deployed length (``at_length_m``), the other None, with its
+    commanded length and the gains and limits it sets (None: the law's own)."""
+
+    start_s: float | None
+    commanded_length_m: float
+    at_length_m: float | None = None
+    k1: float | None = None
+    k2: float | None = None
+    min_tension_N: float | None = None
+    max_tension_N: float | None = None
+    limit_width_N: float | None = None
+    max_speed_m_s: float | None = None
+    speed_brake_gain_N_s_m: float | None = None
+    speed_limit_width_m_s: float | None = None
+
+
 @dataclass(frozen=True)
 class SpoolLaw:
     """The reel as a dynamical system (docs/deployment.md 10): the spool (a drum: inertia J and
@@ -256,8 +274,9 @@ class SpoolLaw:
     min_tension_N: float = 0.0
     max_tension_N: float = 0.0
     limit_width_N: float = 0.0  # 0: no limits
-    # law 'tension': later stages (start time, commanded length), start strictly increasing and > 0;
-    # commanded_length_m holds from t = 0 to the first start (docs/deployment.md 10.6)
+    # law 'tension': later stages (SpoolStage), each taking over from the one before at its start
+    # time or on reaching its length; commanded_length_m and the law's gains and limits hold until
+    # the first (docs/deployment.md 10.6, 10.7)
     stages: tuple = ()
     # either law: the motor's torque within |tau| <= max_torque, and a regulating brake of gain
     # speed_brake_gain engaging above |L'| = max_speed, both through smooth corners (10.4)

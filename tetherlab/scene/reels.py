@@ -6,11 +6,12 @@ parameter present and the initial length within one rod's bounds."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 from ..errors import SceneError
 from ..units import ANGULAR_RATE, FORCE, LENGTH, MASS, MOMENT_OF_INERTIA, RATE, SPEED, TIME, TORQUE, Kind, shown
-from .data import REEL_BIRTHS, REEL_EXITS, REEL_LAWS, Reel, SpoolLaw
+from .data import REEL_BIRTHS, REEL_EXITS, REEL_LAWS, Reel, SpoolLaw, SpoolStage
 from .keys import _choice, _number, _quantity, _required, _table, _vector
 
 #: the spool laws' keys (docs/deployment.md 10, docs/scenes.md)
@@ -18,8 +19,11 @@ _SPOOL_KEYS = ("spool_inertia", "drum_radius", "torque", "viscous_friction", "co
                "max_torque", "torque_limit_width", "max_speed", "speed_brake_gain", "speed_limit_width")
 _TENSION_KEYS = ("reduced_mass", "orbit_rate", "commanded_length", "k1", "k2", "min_tension", "max_tension",
                  "limit_width", "stages")
-#: the keys of one entry of a tension law's `stages` (docs/deployment.md 10.6)
-_STAGE_KEYS = ("start", "commanded_length")
+#: the keys of one entry of a tension law's `stages` (docs/deployment.md 10.6, 10.7): when it takes
+#: over (exactly one of start and at_length), its commanded length, and the gains and limits it sets
+_STAGE_LIMIT_KEYS = ("k1", "k2", "min_tension", "max_tension", "limit_width", "max_speed", "speed_brake_gain",
+                     "speed_limit_width")
+_STAGE_KEYS = ("start", "at_length", "commanded_length") + _STAGE_LIMIT_KEYS
 _REEL_KEYS = ("at", "exit", "law", "speed", "rate", "times", "lengths", "rod_length", "birth_length", "retire_length",
               "stored_length", "point", "exit_direction", "spool_radius", "spool_axis", "birth") + _SPOOL_KEYS + _TENSION_KEYS
 VISCOUS = Kind("N s / m", "a viscous friction coefficient (force per speed)", "20 N s/m")
@@ -102,7 +106,7 @@ def parse_reel(value: Any, path: str, length_m: float) -> Reel:
             f"{retire:.6g} m",
         )
     hub = _parse_hub(table, path, exit_)
-    spool = _spool_law(table, path, law, exit_, length_m) if law in ("spool", "tension") else None
+    spool = _spool_law(table, path, law, exit_, length_m, stored) if law in ("spool", "tension") else None
     return Reel(law, exit_, speed, rate, rod, birth, retire, stored, times, lengths, spool=spool, birth=birth_kind,
                 **hub)
 
@@ -143,7 +147,7 @@ def _parse_hub(table, path: str, exit_: str) -> dict:
     return out
 
 
-def _spool_law(table, path: str, law: str, exit_: str, length_m: float) -> SpoolLaw:
+def _spool_law(table, path: str, law: str, exit_: str, length_m: float, stored_m: float) -> SpoolLaw:
     """The spool and its friction, and the tension law's gains and limits (docs/deployment.md 10)."""
     drum = exit_ == "drum"
     if drum:
@@ -188,36 +192,141 @@ def _spool_law(table, path: str, law: str, exit_: str, length_m: float) -> Spool
         width = _quantity(table.get("limit_width", f"{0.01 * scale!r} N"), f"{path}.limit_width", FORCE, positive=True)
     elif "limit_width" in table:
         raise SceneError(f"{path}.limit_width", "a min_tension or max_tension for it to round", shown(table["limit_width"]))
-    del length_m
-    stages = _stages(table, path) if "stages" in table else ()
-    return SpoolLaw(inertia, radius, 0.0, viscous, coulomb, vs, mstar, omega, lc, k1, k2, tmin, tmax, width, stages,
-                    **limits)
+    law_ = SpoolLaw(inertia, radius, 0.0, viscous, coulomb, vs, mstar, omega, lc, k1, k2, tmin, tmax, width, **limits)
+    if "stages" not in table:
+        return law_
+    return replace(law_, stages=_stages(table, path, law_, length_m, length_m + stored_m))
 
 
-def _stages(table, path: str) -> tuple:
-    """A tension law's later stages: ((start s, commanded length m), ...), the starts after 0 and
-    strictly increasing.  The scene's `commanded_length` holds until the first start; a stage's
-    length holds from its start to the next one's (docs/deployment.md 10.6)."""
+def _stages(table, path: str, law: SpoolLaw, length0_m: float, line_m: float) -> tuple:
+    """A tension law's later stages (SpoolStage, docs/deployment.md 10.6, 10.7), in the order they
+    take over.  A stage starts at a time (``start``: after 0 and after the previous time stage) or
+    on reaching a deployed length (``at_length``: positive, within the line, and on the side the
+    previous stage's command drives L to from where that stage began); exactly one of the two.
+    Once a stage is started by a length, the later ones are too: a time stage after it would have
+    to wait for a switch whose time the scene does not know.  The gains and limits a stage does
+    not give are the law's."""
     raw = table["stages"]
     key = f"{path}.stages"
-    example = "[{start = '2 h', commanded_length = '30 km'}]"
+    example = "[{start = '2 h', commanded_length = '30 km'}] or [{at_length = '3.4 km', commanded_length = '30 km'}]"
     if not isinstance(raw, (list, tuple)) or not raw:
-        raise SceneError(key, f"a non-empty list of stages, each a table of start and commanded_length (e.g. {example})",
-                         shown(raw))  # fmt: skip
-    out = []
+        raise SceneError(key, f"a non-empty list of stages, each a table of start (or at_length) and commanded_length "
+                         f"(e.g. {example})", shown(raw))  # fmt: skip
+    out: list = []
     for j, st in enumerate(raw):
         sk = f"{key}[{j}]"
         st = _table(st, sk, _STAGE_KEYS)
-        start = _quantity(_required(st, "start", sk, f"{TIME.describe()} (when the stage's command takes over)"),
-                          f"{sk}.start", TIME)  # fmt: skip
+        if ("start" in st) == ("at_length" in st):
+            got = "both" if "start" in st else "neither"
+            raise SceneError(sk, "exactly one of start (a time) and at_length (a deployed length): when the stage's "
+                             "command takes over", f"{got} ({shown(st)})")  # fmt: skip
         lc = _quantity(_required(st, "commanded_length", sk, LENGTH.describe()), f"{sk}.commanded_length", LENGTH,
                        positive=True)  # fmt: skip
-        before = out[-1][0] if out else 0.0
-        if not start > before:
-            raise SceneError(f"{sk}.start", f"a start after {'the previous stage' if out else 't = 0'} "
-                             f"({before:.6g} s): stages in order of time", f"{start:.6g} s")  # fmt: skip
-        out.append((start, lc))
+        prev = out[-1] if out else None
+        start = at = None
+        if "start" in st:
+            start = _quantity(st["start"], f"{sk}.start", TIME)
+            if prev is not None and prev.at_length_m is not None:
+                raise SceneError(f"{sk}.start", "an at_length, as the previous stage's (a stage after one started by a "
+                                 "length is started by a length: the previous switch's time is not known ahead)",
+                                 f"start {start:.6g} s")  # fmt: skip
+            before = prev.start_s if prev is not None else 0.0
+            if not start > before:
+                raise SceneError(f"{sk}.start", f"a start after {'the previous stage' if out else 't = 0'} "
+                                 f"({before:.6g} s): stages in order of time", f"{start:.6g} s")  # fmt: skip
+        else:
+            at = _quantity(st["at_length"], f"{sk}.at_length", LENGTH, positive=True)
+            if at > line_m * (1.0 + 1e-12):
+                raise SceneError(f"{sk}.at_length", f"at most the whole line ({line_m:.6g} m: the tether's length and "
+                                 "stored_length)", f"{at:.6g} m")  # fmt: skip
+            _reachable(sk, at, prev, law, length0_m)
+        stage = SpoolStage(start, lc, at, **_stage_overrides(st, sk, law, lc))
+        out.append(stage)
     return tuple(out)
+
+
+def _reachable(sk: str, at_m: float, prev, law: SpoolLaw, length0_m: float) -> None:
+    """A stage's at_length must lie where the previous stage's command drives L from where that
+    stage began: beyond its start towards its commanded length (the law's own from the tether's
+    length at t = 0; a length stage's from its at_length).  After a time stage, where L is at its
+    start is not known ahead and only the length's bounds are checked."""
+    if prev is not None and prev.at_length_m is None:
+        return
+    begin = length0_m if prev is None else prev.at_length_m
+    aim = law.commanded_length_m if prev is None else prev.commanded_length_m
+    by = "the law's commanded_length" if prev is None else "the previous stage's commanded_length"
+    if (aim - begin) * (at_m - begin) > 0.0:
+        return
+    side = "above" if aim > begin else "below" if aim < begin else "away from"
+    raise SceneError(f"{sk}.at_length", f"a length {side} {begin:.6g} m, where the previous stage begins, on the side "
+                     f"{by} ({aim:.6g} m) drives the deployed length to (else it is never reached)",
+                     f"{at_m:.6g} m")  # fmt: skip
+
+
+def _stage_overrides(st, sk: str, law: SpoolLaw, lc_m: float) -> dict:
+    """The gains and limits a stage gives (the others None: the law's), checked as the law's are,
+    together with the law's values they combine with."""
+    out: dict = {}
+    if "k1" in st:
+        out["k1"] = _number(st["k1"], f"{sk}.k1", "a number (the gain on l - l_c)")
+    if "k2" in st:
+        out["k2"] = _number(st["k2"], f"{sk}.k2", "a number (the gain on l'/Omega)")
+    if "min_tension" in st:
+        out["min_tension_N"] = _quantity(st["min_tension"], f"{sk}.min_tension", FORCE, nonnegative=True)
+    if "max_tension" in st:
+        out["max_tension_N"] = _quantity(st["max_tension"], f"{sk}.max_tension", FORCE, positive=True)
+    tmin = out.get("min_tension_N", law.min_tension_N)
+    tmax = out.get("max_tension_N", law.max_tension_N)
+    if tmax and not tmax > tmin:
+        raise SceneError(f"{sk}.max_tension" if "max_tension" in st else f"{sk}.min_tension",
+                         f"max_tension above min_tension (the stage's or the law's): {tmax:.6g} N", f"min_tension "
+                         f"{tmin:.6g} N")  # fmt: skip
+    limited = law.limit_width_N > 0.0 or "min_tension" in st or "max_tension" in st
+    if "limit_width" in st:
+        if not limited:
+            raise SceneError(f"{sk}.limit_width", "a min_tension or max_tension (the stage's or the law's) for it to "
+                             "round", shown(st["limit_width"]))  # fmt: skip
+        out["limit_width_N"] = _quantity(st["limit_width"], f"{sk}.limit_width", FORCE, positive=True)
+    elif "min_tension" in st or "max_tension" in st:
+        # the law's default corner, 1 % of the stage's band (or of its equilibrium tension)
+        scale = (tmax - tmin) if tmax else law.reduced_mass_kg * law.orbit_rate_rad_s**2 * 3.0 * lc_m
+        out["limit_width_N"] = 0.01 * scale
+    if "max_speed" in st:
+        out["max_speed_m_s"] = _quantity(st["max_speed"], f"{sk}.max_speed", SPEED, positive=True)
+    if "speed_brake_gain" in st:
+        out["speed_brake_gain_N_s_m"] = _quantity(st["speed_brake_gain"], f"{sk}.speed_brake_gain", VISCOUS,
+                                                  positive=True)  # fmt: skip
+    vmax = out.get("max_speed_m_s", law.max_speed_m_s)
+    if vmax > 0.0 and not out.get("speed_brake_gain_N_s_m", law.speed_brake_gain_N_s_m) > 0.0:
+        raise SceneError(f"{sk}.speed_brake_gain", f"{VISCOUS.describe()} (the regulating brake's force per m/s "
+                         "beyond max_speed: the law has none)", "none")  # fmt: skip
+    if "speed_limit_width" in st:
+        if not vmax > 0.0:
+            raise SceneError(f"{sk}.speed_limit_width", "a max_speed (the stage's or the law's) for the regulating "
+                             "brake to hold", shown(st["speed_limit_width"]))  # fmt: skip
+        out["speed_limit_width_m_s"] = _limit_width(st, sk, "speed_limit_width", vmax, SPEED, "m/s")
+    elif "max_speed" in st:
+        out["speed_limit_width_m_s"] = LIMIT_WIDTH_DEFAULT * vmax
+    return out
+
+
+def stage_parameters(spool: SpoolLaw, j: int) -> dict:
+    """The tension law's parameters while stage j holds (-1: the law's own, before the first
+    stage): the kernel's reel fields (tetherlab/kernel/schema.py REEL) by name."""
+    lc, k1, k2 = spool.commanded_length_m, spool.k1, spool.k2
+    tmin, tmax, tw = spool.min_tension_N, spool.max_tension_N, spool.limit_width_N
+    vmax, vgain, vw = spool.max_speed_m_s, spool.speed_brake_gain_N_s_m, spool.speed_limit_width_m_s
+    if j >= 0:
+        s = spool.stages[j]
+
+        def pick(a, b):
+            return b if a is None else a
+
+        lc, k1, k2 = s.commanded_length_m, pick(s.k1, k1), pick(s.k2, k2)
+        tmin, tmax, tw = pick(s.min_tension_N, tmin), pick(s.max_tension_N, tmax), pick(s.limit_width_N, tw)
+        vmax, vgain, vw = pick(s.max_speed_m_s, vmax), pick(s.speed_brake_gain_N_s_m, vgain), pick(s.speed_limit_width_m_s, vw)
+    return {"lc_m": lc, "k1": k1, "k2": k2, "tmin_N": tmin, "tmax_N": tmax, "twidth_N": tw, "max_speed_m_s": vmax,
+            "speed_gain_N_s_m": vgain, "speed_width_m_s": vw}
 
 
 def _limit_width(table, path: str, key: str, limit: float, kind, unit: str) -> float:

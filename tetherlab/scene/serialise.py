@@ -278,5 +278,22 @@ def _spool_dict(r) -> dict:
             out["max_tension"] = format_si(sp.max_tension_N, FORCE)
         out["limit_width"] = format_si(sp.limit_width_N, FORCE)
     if sp.stages:
-        out["stages"] = [{"start": format_si(t, TIME), "commanded_length": format_si(lc, LENGTH)} for t, lc in sp.stages]
+        out["stages"] = [_stage_dict(s) for s in sp.stages]
+    return out
+
+
+def _stage_dict(s) -> dict:
+    """A tension law's stage as the scene writes it: its switch, its commanded length and the gains
+    and limits it gives (those it leaves to the law are not written)."""
+    from .reels import VISCOUS
+
+    out: dict = {"start": format_si(s.start_s, TIME)} if s.start_s is not None else {"at_length": format_si(s.at_length_m, LENGTH)}
+    out["commanded_length"] = format_si(s.commanded_length_m, LENGTH)
+    for key, attr, kind in (("k1", "k1", None), ("k2", "k2", None), ("min_tension", "min_tension_N", FORCE),
+                            ("max_tension", "max_tension_N", FORCE), ("limit_width", "limit_width_N", FORCE),
+                            ("max_speed", "max_speed_m_s", SPEED), ("speed_brake_gain", "speed_brake_gain_N_s_m", VISCOUS),
+                            ("speed_limit_width", "speed_limit_width_m_s", SPEED)):  # fmt: skip
+        v = getattr(s, attr)
+        if v is not None:
+            out[key] = v if kind is None else format_si(v, kind)
     return out

@@ -38,6 +38,7 @@ import numpy as np
 from .._jit import njit
 from ..kernel.layout import (
     DEFECT_CANISTER_AS_DRUM,
+    DEFECT_DRUM_NO_TURNS,
     DEFECT_SPOOL_NO_SPEED_BRAKE,
     DEFECT_SPOOL_TORQUE_ONE_SIDED,
     DEFECT_SPOOL_TORQUE_UNLIMITED,
@@ -168,6 +169,8 @@ def spool_forces(p, i, L, Ld, eps):
     drum = int(p[rb + RL_EXIT]) == REEL_EXIT_DRUM
     if drum:
         ms = p[rb + RL_MEFF] + rho * (p[rb + RL_LINE] - L)
+        if int(p[H_MUTANT]) == DEFECT_DRUM_NO_TURNS:  # negative control of the YES2-like energy balance
+            ms = p[rb + RL_MEFF]
         jump = rho * Ld * Ld * eps
     else:
         ms = 0.0

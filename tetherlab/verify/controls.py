@@ -278,6 +278,8 @@ def mutation_summary(cells, gates: dict, study_values: dict):
         ("deployment_limits_one_sided_negative_control", "spool_torque_one_sided",
          ("deployment_limits_torque_over_budget",)),
         ("deployment_yes2_hold_3l_negative_control", "tension_3l", ("deployment_yes2_hold_over_budget",)),
+        ("deployment_yes2_turns_negative_control", "drum_no_turns", ("deployment_yes2_energy_over_bound",)),
+        ("deployment_yes2_first_rod_negative_control", "stage_first_rod", ("deployment_yes2_switch_over_tolerance",)),
         ("deployment_retrieval_settle_3l_negative_control", "tension_3l", ("deployment_retrieval_settle_over_budget",)),
         # (the birth's cut is Python: simulate_reel's remap_defect "cut-nominal", run by the study)
         ("deployment_convergence_cut_nominal_negative_control", "birth_cut_nominal",

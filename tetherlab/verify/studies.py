@@ -212,6 +212,11 @@ def _deployment_gates(outdir: Path) -> dict:
         # part K: the YES2-like first stage held (studies/reel_yes2.py, docs/deployment.md 11.4)
         "deployment_yes2_hold_over_budget": g.get("deployment_yes2_hold_over_budget"),
         "deployment_yes2_hold_3l_negative_control": g.get("deployment_yes2_hold_3l_negative_control"),
+        # part K: the two-stage run's energy across the switch and the births, and the switch's location (15.1)
+        "deployment_yes2_energy_over_bound": g.get("deployment_yes2_energy_over_bound"),
+        "deployment_yes2_switch_over_tolerance": g.get("deployment_yes2_switch_over_tolerance"),
+        "deployment_yes2_turns_negative_control": g.get("deployment_yes2_turns_negative_control"),
+        "deployment_yes2_first_rod_negative_control": g.get("deployment_yes2_first_rod_negative_control"),
         # part L: the staged retrieval's last stage settling (studies/reel_retrieval.py, docs/deployment.md 14.2)
         "deployment_retrieval_settle_over_budget": g.get("deployment_retrieval_settle_over_budget"),
         "deployment_retrieval_settle_3l_negative_control": g.get("deployment_retrieval_settle_3l_negative_control"),
