@@ -48,11 +48,6 @@ def _scene(lc0_m: float, at_m: float, lc1_m: float) -> Scene:
     return Scene.from_dict(data)
 
 
-#: the switch or the birth is lost today: the phase ends on one event and the other starts the next
-#: phase on its new side (strict, so that the fix turns it into a failure to be removed)
-LOST = pytest.mark.xfail(strict=True, reason="a change at the instant of another is lost (docs/deployment.md 17.2)")
-
-
 @pytest.fixture(scope="module", params=list(CASES))
 def case(request):
     lc0, at, lc1, kind, rods = CASES[request.param]
@@ -60,7 +55,6 @@ def case(request):
     return request.param, at, kind, rods, simulate_reel(_scene(lc0, at, lc1), progress=False)
 
 
-@LOST
 def test_a_stage_and_a_bound_at_one_instant_are_both_taken(case):
     """Both the switch and the birth (retirement) are in ``changes``, at one time t_b; the switch's
     length is at_length within (10.7a): |L'| 64 eps max(t_b, t_b - t_a) + 4 eps a + sqrt(n)
@@ -81,13 +75,11 @@ def test_a_stage_and_a_bound_at_one_instant_are_both_taken(case):
     assert speed > 0.05, (name, speed)  # a crossing, not a graze
 
 
-def test_the_first_rod_stays_within_its_bounds(case, request):
+def test_the_first_rod_stays_within_its_bounds(case):
     """No change lost: at the end the first rod l = L - (n - 1) l_rod is between the retirement
     bound (50 m) and the birth bound (1500 m) of the study's reel, to 1e-6 m (a change taken at a
     located stop is within 1e-9 m of its bound; 1e-6 m leaves room for the outputs' rounding)."""
     name, at, kind, rods, run = case
-    if name == "birth-due-at-stage":  # the lost birth leaves its rod growing past the bound
-        request.applymarker(LOST)
     r = run.reel
     L = float(r["deployed_length_m"].iloc[-1])
     n = int(r["rods"].iloc[-1])
