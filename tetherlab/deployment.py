@@ -440,12 +440,15 @@ def due_changes(tethers, state: dict, prep, y_end, t_a: float, t_b: float, t_end
       stop in length: |L'| times the event bracket's width (integrators/common.py
       event_time_tolerance: 64 eps max(|t_b|, |h|), h <= t_b - t_a) plus the round-off of
       l = L - (n - 1) l_rod (4 eps L).  A rod farther below than tol starts the next phase with
-      g < 0 and its crossing is located there."""
+      g < 0 and its crossing is located there.
+
+    A phase ended by a stage switch (``first`` (t, 'stage'), :func:`due_stages`) checks t's own
+    bounds too: the switch leaves the layout as it is (docs/deployment.md 17.2)."""
     from .integrators.common import EPS, event_time_tolerance
 
     out = [first]
     for t in tethers:
-        if t is first[0]:
+        if t is first[0] and first[1] != "stage":
             continue
         reel, n = t.reel, state[t.name]
         if reel.spool is None:
@@ -460,6 +463,32 @@ def due_changes(tethers, state: dict, prep, y_end, t_a: float, t_b: float, t_end
             out.append((t, "birth"))
         elif l_first <= reel.retire_length_m + tol:
             out.append((t, "retire" if n > 1 else "retrieved"))
+    return out
+
+
+def due_stages(tethers, active: dict, prep, y_a, y_end, t_a: float, t_b: float, located=None) -> list:
+    """Every staged tension law whose next length stage is due at t_b, the end of a phase that a
+    change ended: [(tether, 'stage'), ...], ``located`` (the tether whose switch ended the phase,
+    if one did) left out.  Not taking it here would lose it: the event ``reel.<tether>.stage`` is a
+    change of side of g = L - a, and a phase that starts with g on its new side never fires it
+    (docs/deployment.md 17.2).  Due when g changed side over the phase (its crossing shared the
+    located stop's bracket), or when |L - a| at t_b is within the located stop's tolerance in length
+    (:func:`located_length_tolerance`, 10.7a): the switch is then as near its length as a located one."""
+    out = []
+    for t in tethers:
+        if t.name not in active or t is located:
+            continue
+        sp, j = t.reel.spool, active[t.name]
+        a = sp.stages[j + 1].at_length_m if j + 1 < len(sp.stages) else None
+        if a is None:
+            continue
+        sl = prep.model.state.spool_of(_kernel_index(prep, t.name))
+        L_a = float(y_a[sl][0])
+        L_b, speed = (float(x) for x in y_end[sl])
+        tol = located_length_tolerance(speed, t_b, t_b - t_a, a, len(y_end), prep.rtol,
+                                       float(np.asarray(prep.atol)[sl][0]))["total"]  # fmt: skip
+        if (L_a - a < 0.0) != (L_b - a < 0.0) or abs(L_b - a) <= tol:
+            out.append((t, "stage"))
     return out
 
 
@@ -659,17 +688,9 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
             reel_parts, inv = phase_rows(tethers, ph, state, res.t, out, d)
             sink.end_phase(loop, prep, res, stats, msg, p, d, reel_parts, inv)
             spool_change = _spool_change(stats.get("stopped_by"), tethers) if res.status == 0 else None
-            if spool_change is not None and spool_change[1] == "stage":
-                # the deployed length reached the next stage's: located, the same model goes on from
-                # there under that stage (docs/deployment.md 10.7); a bound reached at the same
-                # instant is the next phase's first event (it starts on the bound's old side)
-                t_b, t = float(res.t[-1]), spool_change[0]
-                L = float(res.y_end[prep.model.state.spool_of(_kernel_index(prep, t.name))][0])
-                j = active_stages(tethers, changes, t_a)[t.name] + 1
-                changes = changes + [{"t_s": t_b, "reel": t.name, "change": "stage", "stage": j, "length_m": L}]
-                loop = dict(loop, phase=ph + 1, t_a=t_b, y=res.y_end, changes=changes)
-                continue
-            if spool_change is not None:  # a spool law's first rod reached a bound: located, the phase ends there
+            if spool_change is not None:
+                # a spool law's first rod reached a bound, or its deployed length the next stage's
+                # (docs/deployment.md 10.7): located, the phase ends there
                 t_b = float(res.t[-1])
                 nxt = (t_b, spool_change[1], spool_change[0])
                 if spool_change[1] == "retire" and state[spool_change[0].name] == 1:
@@ -683,9 +704,15 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
             if nxt[1] == "knot":  # the same model goes on from the knot
                 loop = dict(loop, phase=ph + 1, t_a=t_b, y=res.y_end)
                 continue
-            # a birth, a retirement, or the last rod retrieved: the phase ends at t_b, with every
-            # reel at its bound there (due_changes), one remap after the other at t_b
+            # a birth, a retirement, a stage switch or the last rod retrieved: the phase ends at t_b,
+            # with every reel at its bound there (due_changes) and every stage at its length
+            # (due_stages), taken at t_b in that order: a switch only rewrites the law's parameters
+            # at the next phase's start, and a remap reads neither them nor changes them
+            # (docs/deployment.md 17.2)
+            active, prep_b = active_stages(tethers, changes, t_a), prep
             due = due_changes(tethers, state, prep, res.y_end, t_a, t_b, t_end, (nxt[2], nxt[1]))
+            due += due_stages(tethers, active, prep, y, res.y_end, t_a, t_b,
+                              nxt[2] if nxt[1] == "stage" else None)  # fmt: skip
             retrieved = [(t, kind) for t, kind in due if kind == "retrieved"]
             if retrieved:
                 t = retrieved[0][0]
@@ -694,8 +721,13 @@ def run_phases(scene, sink, *, progress=None, defect: int = 0, remap_defect: str
                            f"retirement bound ({t.reel.retire_length_m:.6g} m deployed); outputs up to it are kept")  # fmt: skip
                 changes.append({"t_s": t_b, "reel": t.name, "change": "retrieved", "rods": state[t.name]})
                 break
-            y = res.y_end
+            y_b, y, model_rods = res.y_end, res.y_end, loop["model_rods"]
             for t, kind in due:
+                if kind == "stage":  # the same model goes on under the next stage (set_stage)
+                    L = float(y_b[prep_b.model.state.spool_of(_kernel_index(prep_b, t.name))][0])
+                    changes = changes + [{"t_s": t_b, "reel": t.name, "change": "stage", "stage": active[t.name] + 1,
+                                          "length_m": L}]  # fmt: skip
+                    continue
                 prep, y, state, model_rods = _remap(scene, opts, prep0, prep, y, state, tethers, t, kind, t_b,
                                                     remap_defect)  # fmt: skip
                 changes = changes + [{"t_s": t_b, "reel": t.name, "change": kind, "rods": state[t.name]}]
