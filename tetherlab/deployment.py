@@ -444,8 +444,6 @@ def due_changes(tethers, state: dict, prep, y_end, t_a: float, t_b: float, t_end
 
     A phase ended by a stage switch (``first`` (t, 'stage'), :func:`due_stages`) checks t's own
     bounds too: the switch leaves the layout as it is (docs/deployment.md 17.2)."""
-    from .integrators.common import EPS, event_time_tolerance
-
     out = [first]
     for t in tethers:
         if t is first[0] and first[1] != "stage":
@@ -458,7 +456,11 @@ def due_changes(tethers, state: dict, prep, y_end, t_a: float, t_b: float, t_end
             continue
         L, speed = (float(x) for x in y_end[prep.model.state.spool_of(_kernel_index(prep, t.name))])
         l_first = L - (n - 1) * reel.rod_length_m
-        tol = abs(speed) * event_time_tolerance(t_b, t_b - t_a) + 4.0 * EPS * abs(L)
+        # the located stop's bracket and round-off terms; not the integration term a stage switch
+        # adds (10.7a): with it, births 4.6e-12 m apart on a symmetric hub would share one stop
+        # (docs/deployment.md 17.2)
+        terms = located_length_tolerance(speed, t_b, t_b - t_a, L, len(y_end), prep.rtol, 0.0)
+        tol = terms["bracket"] + terms["roundoff"]
         if l_first >= reel.birth_length_m - tol:
             out.append((t, "birth"))
         elif l_first <= reel.retire_length_m + tol:
