@@ -120,6 +120,7 @@ if str(ROOT) not in sys.path:
 from tetherlab.deployment import _rows, birth_state, simulate_reel  # noqa: E402
 from tetherlab.model.params import DEFECT_REEL_FROZEN, DEFECT_REEL_NO_LDOT, DEFECT_REEL_RESCALED  # noqa: E402
 from tetherlab.pipeline import prepare  # noqa: E402
+from tetherlab.richardson import extrapolate, observed_order  # noqa: E402
 from tetherlab.scene import Scene  # noqa: E402
 
 from studies.deployment_hub import hub_figure, part_hub, part_hub_drum  # noqa: E402
@@ -987,18 +988,18 @@ RICHARDSON_ORDER_CAP = 2.0  # neither the rods (TMED, second order) nor the stri
 
 def richardson(v: list) -> tuple[float, float, float]:
     """(limit, error bound, observed order) of a quantity from its last three levels, the step halved
-    level by level: the order p = min(observed, 2), the limit v_n + d/(2^p - 1) with d = v_n - v_(n-1),
-    and its error bound |d|/(2^p - 1), the whole correction: for any order q >= p the limit
-    v_n + d/(2^q - 1) lies between v_n and the extrapolated value (docs/deployment.md 8h)."""
-    d_prev, d = v[-2] - v[-3], v[-1] - v[-2]
-    if d == 0.0:
+    level by level (tetherlab.richardson's order and extrapolation): the order p = min(observed, 2),
+    the limit v_n + d/(2^p - 1) with d = v_n - v_(n-1), and its error bound |d|/(2^p - 1), the whole
+    correction: for any order q >= p the limit v_n + d/(2^q - 1) lies between v_n and the
+    extrapolated value (docs/deployment.md 8h).  Not converging monotonically (the order NaN): no
+    limit to extrapolate to, an infinite bound."""
+    if v[-1] == v[-2]:
         return v[-1], 0.0, math.inf
-    order = math.log2(abs(d_prev / d)) if d_prev != 0.0 else -math.inf
-    p = min(order, RICHARDSON_ORDER_CAP)
-    if not (p > 0.0 and d_prev * d > 0.0):  # not converging monotonically: no limit to extrapolate to
+    order = observed_order(v[-3], v[-2], v[-1])
+    if not order > 0.0:
         return v[-1], math.inf, order
-    corr = d / (2.0**p - 1.0)
-    return v[-1] + corr, abs(corr), order
+    limit = extrapolate(v[-2], v[-1], min(order, RICHARDSON_ORDER_CAP))
+    return limit, abs(limit - v[-1]), order
 
 
 def continuum_limit(path: Path = CONTINUUM_LIMIT) -> dict:
